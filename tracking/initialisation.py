@@ -1,0 +1,149 @@
+"""How a self-initialising pass picks its first links (frame 0 to frame 1).
+
+The paper links frames 0 and 1 by optimal nearest-neighbour assignment (IM1). On a turning
+dish with a generous d_max that prefers a shifted pairing at the rim, and the wrong tracks it
+starts survive on slaves. Here each candidate first link is scored instead by the smoothest
+path it can start over the next few frames: a dynamic programme over links, whose per-step
+cost is the individual model (IM2) of each triplet. A wrong link can find a smooth-looking
+continuation for one frame by chance, but hardly for several in a row.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .motion import IndividualModel, smooth_motion_cost
+
+
+def _pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All (origin, point) index pairs with the point within the origin's radius."""
+    if origins.shape[0] == 0 or points.shape[0] == 0:
+        return np.empty(0, np.int64), np.empty(0, np.int64)
+    found = cKDTree(points).query_ball_point(origins, radius)
+    counts = np.fromiter((len(f) for f in found), dtype=np.int64, count=len(found))
+    owner = np.repeat(np.arange(len(found)), counts)
+    target = np.fromiter((j for f in found for j in f), dtype=np.int64, count=int(counts.sum()))
+    return owner, target
+
+
+def first_links(
+    frames: Sequence[np.ndarray],
+    model: IndividualModel,
+    phi_max: float,
+    d_max: float | None,
+    d_min: float,
+    neighbours: int,
+    lookahead: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate links from frame 0 to frame 1, each scored by its smoothest continuation.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions, pixels, in processing order; at least 2 frames.
+    model : IndividualModel
+        Scores each triplet; an order-1 model is replaced by IM2 with default weights, since a
+        triplet needs a velocity.
+    phi_max : float
+        Largest cost of any triplet on a path.
+    d_max : float or None
+        Largest speed, pixels/frame; None takes the ``neighbours`` nearest points of frame 1
+        for each point of frame 0 and lets phi_max bound the speeds after that.
+    d_min : float
+        Smallest speed, pixels/frame.
+    neighbours : int
+        Candidates per frame-0 point when d_max is None.
+    lookahead : int
+        Frames the path spans, the first link's two included (3 scores by one triplet).
+
+    Returns
+    -------
+    head, measurement, cost : ndarray, shape (P,)
+        Frame-0 index, frame-1 index and the mean triplet cost of the best path that starts
+        with that link. A path that cannot be continued within phi_max pays phi_max for each
+        triplet it lacks, so the link stays possible but loses to smooth alternatives.
+    """
+    if model.order == 1:
+        model = IndividualModel("im2")
+    horizon = min(lookahead, len(frames))
+    head, measurement = _first_candidates(frames[0], frames[1], d_max, neighbours)
+    velocity = frames[1][measurement] - frames[0][head]
+    speed = np.hypot(*velocity.T)
+    valid = speed >= d_min
+    if d_max is not None:
+        valid &= speed <= d_max
+    head, measurement = head[valid], measurement[valid]
+    if horizon < 3:
+        cost = phi_max * speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0))
+        return head, measurement, cost
+
+    # Links of each step, as (from, to) index pairs; triplets chain link a of step k to
+    # link b of step k + 1 with a.to == b.from.
+    links = [(head, measurement)]
+    triplets: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for step in range(1, horizon - 1):
+        origin, target = links[-1]
+        start, middle = frames[step - 1][origin], frames[step][target]
+        unique_middle, inverse = np.unique(target, return_inverse=True)
+        move = middle - start
+        move_speed = np.hypot(*move.T)
+        radius = model.gate_radius(move_speed, np.ones(move_speed.size, bool), phi_max)
+        if d_max is not None:
+            radius = np.minimum(radius, d_max)
+        radius = np.where(np.isfinite(radius), radius, np.inf)
+        # One KD query per distinct middle point, with the largest radius any link into it needs.
+        widest = np.zeros(unique_middle.size)
+        np.maximum.at(widest, inverse, radius)
+        widest = np.where(np.isfinite(widest), widest, np.hypot(*np.ptp(frames[step + 1], axis=0)) + 1.0)
+        owner, nxt = _pairs_within(frames[step][unique_middle], widest, frames[step + 1])
+        # Expand to (incoming link, next point) for every incoming link through that middle.
+        order = np.argsort(inverse, kind="stable")
+        per_middle = np.bincount(inverse, minlength=unique_middle.size)
+        first_in = np.concatenate(([0], np.cumsum(per_middle)[:-1]))
+        per_owner = per_middle[owner]
+        link_in = order[np.repeat(first_in[owner], per_owner) + _ranges(per_owner)]
+        point_out = np.repeat(nxt, per_owner)
+        middle_index = np.repeat(unique_middle[owner], per_owner)
+        next_velocity = frames[step + 1][point_out] - frames[step][middle_index]
+        next_speed = np.hypot(*next_velocity.T)
+        triplet_cost = smooth_motion_cost(move[link_in], next_velocity, model.w1, model.w2)
+        ok = (triplet_cost <= phi_max) & (next_speed >= d_min)
+        if d_max is not None:
+            ok &= next_speed <= d_max
+        link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
+        out_links, link_out = np.unique(np.column_stack((middle_index, point_out)), axis=0, return_inverse=True)
+        links.append((out_links[:, 0], out_links[:, 1]))
+        triplets.append((link_in, link_out.ravel(), triplet_cost))
+
+    # Backward dynamic programme: cheapest remaining path cost from each link.
+    to_go = np.zeros(links[-1][0].size)
+    for step in range(len(triplets) - 1, -1, -1):
+        link_in, link_out, triplet_cost = triplets[step]
+        missing = phi_max * (len(triplets) - step)
+        best = np.full(links[step][0].size, missing)
+        np.minimum.at(best, link_in, triplet_cost + to_go[link_out])
+        to_go = best
+    return head, measurement, to_go / len(triplets)
+
+
+def _first_candidates(
+    first: np.ndarray, second: np.ndarray, d_max: float | None, neighbours: int
+) -> tuple[np.ndarray, np.ndarray]:
+    if d_max is not None:
+        return _pairs_within(first, np.full(first.shape[0], d_max), second)
+    k = min(neighbours, second.shape[0])
+    if k == 0 or first.shape[0] == 0:
+        return np.empty(0, np.int64), np.empty(0, np.int64)
+    _, index = cKDTree(second).query(first, k=k)
+    index = np.asarray(index).reshape(first.shape[0], k)
+    return np.repeat(np.arange(first.shape[0]), k), index.ravel()
+
+
+def _ranges(counts: np.ndarray) -> np.ndarray:
+    """Concatenated ``arange(c)`` for each c in counts."""
+    total = int(counts.sum())
+    starts = np.repeat(np.cumsum(counts) - counts, counts)
+    return np.arange(total) - starts

@@ -1,0 +1,288 @@
+"""Individual motion models (IM) and combined motion models (CM) of Veenman et al. (2001).
+
+An individual model scores how well one candidate measurement continues one track head; a
+combined model turns those scores into the edge weights that one frame's assignment sums.
+Costs are computed for a whole frame's candidate pairs at once, as flat arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# The reference code nudges zero-length vectors by 1e-3 px before normalising; adding it to
+# the speeds does the same job without a sign choice and keeps the cost defined.
+SPEED_EPSILON = 1e-3
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """Candidate (head, measurement) pairs of one frame step, as flat arrays.
+
+    Attributes
+    ----------
+    head : ndarray of int, shape (P,)
+        Track head index.
+    measurement : ndarray of int, shape (P,)
+        Index of the measurement in the next frame.
+    displacement : ndarray of float, shape (P, 2)
+        Measurement position minus the head's newest true measurement, pixels.
+    gap : ndarray of int, shape (P,)
+        Frames between the head's newest true measurement and the candidate (1 when the head
+        holds no slaves).
+    previous_velocity : ndarray of float, shape (P, 2)
+        The head's velocity from its two newest true measurements, pixels/frame; NaN where the
+        head has fewer than two.
+    """
+
+    head: np.ndarray
+    measurement: np.ndarray
+    displacement: np.ndarray
+    gap: np.ndarray
+    previous_velocity: np.ndarray
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Candidate velocity, gap-normalised, pixels/frame, shape (P, 2)."""
+        return self.displacement / self.gap[:, None]
+
+    @property
+    def has_history(self) -> np.ndarray:
+        """Boolean (P,): the head has a velocity, so order-2 models apply."""
+        return ~np.isnan(self.previous_velocity[:, 0])
+
+    def subset(self, keep: np.ndarray) -> "Candidates":
+        """The pairs selected by a boolean or index array."""
+        return Candidates(
+            head=self.head[keep],
+            measurement=self.measurement[keep],
+            displacement=self.displacement[keep],
+            gap=self.gap[keep],
+            previous_velocity=self.previous_velocity[keep],
+        )
+
+
+def nearest_neighbour_cost(candidates: Candidates, scale: float) -> np.ndarray:
+    """IM1: gap-normalised distance divided by ``scale``.
+
+    Parameters
+    ----------
+    candidates : Candidates
+        The pairs to score.
+    scale : float
+        Distance that maps to cost 1, pixels/frame (d_max in the paper's code).
+
+    Returns
+    -------
+    ndarray of float, shape (P,)
+    """
+    return np.hypot(*candidates.velocity.T) / scale
+
+
+def smooth_motion_cost(previous_velocity: np.ndarray, velocity: np.ndarray, w1: float, w2: float) -> np.ndarray:
+    """IM2, Sethi and Jain's smooth motion: change of direction and of speed.
+
+    ``w1 * (1 - cos angle) + w2 * (1 - 2 sqrt(s0 s1) / (s0 + s1))``; the direction term lies
+    in [0, 2] and the speed term in [0, 1], so the cost lies in [0, 2 w1 + w2]. A zero-length
+    vector has no direction, so it contributes no direction term.
+
+    Parameters
+    ----------
+    previous_velocity, velocity : ndarray of float, shape (P, 2)
+        Velocities before and after the head, pixels/frame.
+    w1, w2 : float
+        Weights of the direction and speed terms.
+    """
+    speed0 = np.hypot(*previous_velocity.T)
+    speed1 = np.hypot(*velocity.T)
+    dot = np.einsum("ij,ij->i", previous_velocity, velocity)
+    both_move = (speed0 > 0) & (speed1 > 0)
+    cosine = np.divide(dot, speed0 * speed1, out=np.ones_like(dot), where=both_move)
+    direction = 1.0 - np.clip(cosine, -1.0, 1.0)
+    speed0 = speed0 + SPEED_EPSILON
+    speed1 = speed1 + SPEED_EPSILON
+    speed = 1.0 - 2.0 * np.sqrt(speed0 * speed1) / (speed0 + speed1)
+    return w1 * direction + w2 * speed
+
+
+def smooth_motion_speed_ratio_limit(phi_max: float, w2: float) -> float:
+    """Largest speed ratio s1/s0 whose IM2 speed term alone stays within ``phi_max``.
+
+    Used to gate candidates of heads with a velocity: a measurement farther than this ratio
+    times the head's speed cannot pass the phi_max test, whatever its direction.
+
+    Returns
+    -------
+    float
+        The ratio, or ``inf`` when phi_max does not bound the speed term.
+    """
+    bound = phi_max / w2 if w2 > 0 else math.inf
+    if bound >= 1.0:
+        return math.inf
+    # The speed term equals (1 - t)^2 / (1 + t^2) with t = sqrt(ratio); solve it for t.
+    keep = 1.0 - bound
+    t_max = (1.0 + math.sqrt(1.0 - keep * keep)) / keep
+    return t_max * t_max
+
+
+def proximal_uniformity_cost(candidates: Candidates) -> np.ndarray:
+    """IM3, Rangarajan and Shah's proximal uniformity, normalised over the frame's pairs.
+
+    The two terms (change of displacement, and displacement) are each divided by their sum over
+    all the candidate pairs of the frame step, so the costs of one frame sum to 2.
+
+    Returns
+    -------
+    ndarray of float, shape (P,)
+        Cost per pair; pairs of heads with no velocity score on the displacement term alone.
+    """
+    displacement = candidates.velocity
+    previous = np.where(candidates.has_history[:, None], candidates.previous_velocity, displacement)
+    change = np.hypot(*(displacement - previous).T)
+    distance = np.hypot(*displacement.T)
+    change_total = change.sum()
+    distance_total = distance.sum()
+    cost = np.zeros_like(distance)
+    if change_total > 0:
+        cost += change / change_total
+    if distance_total > 0:
+        cost += distance / distance_total
+    return cost
+
+
+@dataclass(frozen=True)
+class IndividualModel:
+    """Which individual model scores a pair, with its parameters.
+
+    Attributes
+    ----------
+    name : {"im1", "im2", "im3"}
+        IM1 nearest neighbour, IM2 smooth motion (Sethi-Jain), IM3 proximal uniformity.
+    w1, w2 : float
+        IM2 weights of direction and speed (the paper's rotating-dish values 0.1 and 0.9).
+    """
+
+    name: str = "im2"
+    w1: float = 0.1
+    w2: float = 0.9
+
+    def __post_init__(self) -> None:
+        if self.name not in ("im1", "im2", "im3"):
+            raise ValueError(f"unknown individual model {self.name!r}; choose im1, im2 or im3")
+        if self.w1 < 0 or self.w2 < 0 or self.w1 + self.w2 == 0:
+            raise ValueError("IM2 weights must be non-negative and not both zero")
+
+    @property
+    def order(self) -> int:
+        """1 for models that need only the head position, 2 for those that need a velocity."""
+        return 1 if self.name == "im1" else 2
+
+    def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
+        """Individual cost of every candidate pair.
+
+        Heads without a velocity cannot be scored by an order-2 model; they fall back to IM1
+        scaled so that a move of d_max costs phi_max (the reference code's IM1 gate).
+
+        Parameters
+        ----------
+        candidates : Candidates
+        phi_max : float
+            Largest allowed cost; used to scale the IM1 fallback.
+        d_max : float
+            Speed that maps to cost phi_max under IM1, pixels/frame.
+        """
+        fallback = phi_max * nearest_neighbour_cost(candidates, d_max)
+        if self.name == "im1":
+            return fallback
+        if self.name == "im3":
+            return proximal_uniformity_cost(candidates)
+        history = candidates.has_history
+        cost = fallback
+        if history.any():
+            cost = fallback.copy()
+            cost[history] = smooth_motion_cost(
+                candidates.previous_velocity[history], candidates.velocity[history], self.w1, self.w2
+            )
+        return cost
+
+    def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
+        """Per-head speed beyond which no candidate can pass the phi_max test, pixels/frame.
+
+        Parameters
+        ----------
+        speed : ndarray of float, shape (m,)
+            Each head's previous speed, pixels/frame (ignored where ``has_history`` is False).
+        has_history : ndarray of bool, shape (m,)
+        phi_max : float
+
+        Returns
+        -------
+        ndarray of float, shape (m,)
+            ``inf`` where the model does not bound the speed.
+        """
+        radius = np.full(speed.shape, np.inf)
+        if self.name == "im2":
+            ratio = smooth_motion_speed_ratio_limit(phi_max, self.w2)
+            if math.isfinite(ratio):
+                bounded = ratio * (speed + SPEED_EPSILON)
+                radius[has_history] = bounded[has_history] * (1 + 1e-9) + 1e-9
+        return radius
+
+
+@dataclass(frozen=True)
+class CombinedModel:
+    """How individual costs combine into one frame's assignment weights.
+
+    Attributes
+    ----------
+    name : {"cm1", "cm2"}
+        CM1 generalised mean (weights ``c**z``); CM2 deviation conditioned on competition and
+        alternatives (``c - w1 * mean alternatives - w2 * mean competitors``, over gated pairs).
+    z : float
+        CM1 exponent; larger z penalises large deviations more.
+    w1, w2 : float
+        CM2 weights of the head's alternatives and the measurement's competitors.
+    """
+
+    name: str = "cm1"
+    z: float = 1.0
+    w1: float = 0.0
+    w2: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.name not in ("cm1", "cm2"):
+            raise ValueError(f"unknown combined model {self.name!r}; choose cm1 or cm2")
+        if self.z <= 0:
+            raise ValueError(f"CM1 exponent z must be positive, got {self.z}")
+        if self.w1 < 0 or self.w2 < 0:
+            raise ValueError("CM2 weights must be non-negative")
+
+    def unmatched_weight(self, phi_max: float) -> float:
+        """Weight of a slave (missed point) or a false track (spurious measurement)."""
+        return phi_max**self.z if self.name == "cm1" else phi_max
+
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+        """Assignment weight of each pair that survived pruning.
+
+        Parameters
+        ----------
+        cost : ndarray of float, shape (P,)
+            Individual costs, all within phi_max.
+        head, measurement : ndarray of int, shape (P,)
+            The pairs' head and measurement indices (CM2 averages over each one's other pairs).
+        """
+        if self.name == "cm1":
+            return cost**self.z
+        return cost - self.w1 * _mean_of_others(cost, head) - self.w2 * _mean_of_others(cost, measurement)
+
+
+def _mean_of_others(cost: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """For each pair, the mean cost of the other pairs in its group (0 when it is alone)."""
+    if cost.size == 0:
+        return cost
+    _, inverse, counts = np.unique(group, return_inverse=True, return_counts=True)
+    totals = np.bincount(inverse, weights=cost)
+    others = counts[inverse] - 1
+    return np.divide(totals[inverse] - cost, others, out=np.zeros_like(cost), where=others > 0)

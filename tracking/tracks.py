@@ -1,0 +1,162 @@
+"""The track set: the one data structure that every tracker returns and every metric reads.
+
+Tracks are held as dense arrays over (track, frame) rather than as lists of points, because the
+paper's trackers keep a fixed number of heads advancing in lock step, and because metrics and
+renderers then become array expressions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+NO_MEASUREMENT = -1
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """A set of tracks over consecutive frames.
+
+    Attributes
+    ----------
+    xy : ndarray of float, shape (n_tracks, n_frames, 2)
+        Position (x to the right, y down, pixels, pixel centres at integer coordinates) of each
+        track in each frame; NaN where the track has no position (before it starts, after it
+        ends, or a trailing slave whose position is undefined).
+    measurement : ndarray of int, shape (n_tracks, n_frames)
+        Index of the measurement within its frame that the track holds, or ``NO_MEASUREMENT``
+        (-1) where the position is interpolated or absent.
+    first_frame : int
+        0-based frame index of column 0.
+    track_ids : ndarray of int, shape (n_tracks,)
+        Identifier of each track, as written to files.
+    """
+
+    xy: np.ndarray
+    measurement: np.ndarray
+    first_frame: int = 0
+    track_ids: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.xy.ndim != 3 or self.xy.shape[2] != 2:
+            raise ValueError(f"xy must have shape (n_tracks, n_frames, 2), got {self.xy.shape}")
+        if self.measurement.shape != self.xy.shape[:2]:
+            raise ValueError("measurement must have shape (n_tracks, n_frames) matching xy")
+        if self.track_ids is None:
+            object.__setattr__(self, "track_ids", np.arange(self.xy.shape[0]))
+
+    @property
+    def n_tracks(self) -> int:
+        return self.xy.shape[0]
+
+    @property
+    def n_frames(self) -> int:
+        return self.xy.shape[1]
+
+    @property
+    def present(self) -> np.ndarray:
+        """Boolean (n_tracks, n_frames): the track has a position in that frame."""
+        return ~np.isnan(self.xy[..., 0])
+
+    @property
+    def interpolated(self) -> np.ndarray:
+        """Boolean (n_tracks, n_frames): a position that no measurement supports (bound slave)."""
+        return self.present & (self.measurement == NO_MEASUREMENT)
+
+    def to_rows(self) -> dict[str, np.ndarray]:
+        """Flatten to the columns of ``tracks.csv``, sorted by track then frame.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``track_id``, ``frame`` (0-based), ``x``, ``y`` (pixels), ``interpolated`` (0 or 1).
+        """
+        track_index, frame_index = np.nonzero(self.present)
+        return {
+            "track_id": self.track_ids[track_index],
+            "frame": frame_index + self.first_frame,
+            "x": self.xy[track_index, frame_index, 0],
+            "y": self.xy[track_index, frame_index, 1],
+            "interpolated": self.interpolated[track_index, frame_index].astype(np.int64),
+        }
+
+    @classmethod
+    def from_rows(
+        cls,
+        track_id: np.ndarray,
+        frame: np.ndarray,
+        x: np.ndarray,
+        y: np.ndarray,
+        interpolated: np.ndarray | None = None,
+    ) -> "Tracks":
+        """Build a track set from flat rows (the inverse of :meth:`to_rows`).
+
+        Measurement indices are not stored in files; a measured row gets index 0 as a marker
+        that it is measured, so only :attr:`interpolated` and positions survive a round trip.
+
+        Raises
+        ------
+        ValueError
+            If a (track_id, frame) pair occurs twice.
+        """
+        track_id = np.asarray(track_id, dtype=np.int64)
+        frame = np.asarray(frame, dtype=np.int64)
+        ids, track_index = np.unique(track_id, return_inverse=True)
+        first = int(frame.min()) if frame.size else 0
+        n_frames = int(frame.max()) - first + 1 if frame.size else 0
+        xy = np.full((ids.size, n_frames, 2), np.nan)
+        measurement = np.full((ids.size, n_frames), NO_MEASUREMENT, dtype=np.int64)
+        column = frame - first
+        cell = track_index * max(n_frames, 1) + column
+        if np.unique(cell).size != cell.size:
+            raise ValueError("a track has two rows for the same frame")
+        xy[track_index, column, 0] = x
+        xy[track_index, column, 1] = y
+        measured = np.ones(track_id.size, bool) if interpolated is None else ~np.asarray(interpolated, bool)
+        measurement[track_index[measured], column[measured]] = 0
+        return cls(xy=xy, measurement=measurement, first_frame=first, track_ids=ids)
+
+
+def tracks_from_assignment(
+    frames: list[np.ndarray], assignment: np.ndarray, first_frame: int = 0
+) -> Tracks:
+    """Turn per-frame measurement indices into positions, interpolating bound slaves.
+
+    A bound slave (a frame without a measurement between two true measurements of the same
+    track) gets the position on the straight line between them, evenly spaced in time, as the
+    paper's slave interpolation does. Slaves before a track's first or after its last true
+    measurement have no defined position and stay NaN.
+
+    Parameters
+    ----------
+    frames : list of ndarray, each of shape (M_k, 2)
+        Measurement positions per frame, pixels.
+    assignment : ndarray of int, shape (n_tracks, n_frames)
+        Measurement index per track and frame, or ``NO_MEASUREMENT``.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    """
+    n_tracks, n_frames = assignment.shape
+    xy = np.full((n_tracks, n_frames, 2), np.nan)
+    for column, points in enumerate(frames):
+        held = assignment[:, column] != NO_MEASUREMENT
+        xy[held, column] = points[assignment[held, column]]
+    _interpolate_inner_gaps(xy)
+    return Tracks(xy=xy, measurement=assignment.copy(), first_frame=first_frame)
+
+
+def _interpolate_inner_gaps(xy: np.ndarray) -> None:
+    """Fill NaN runs that lie between two known positions of the same track, in place."""
+    known = ~np.isnan(xy[..., 0])
+    frame = np.arange(xy.shape[1])
+    # Index of the latest known frame at or before each frame, and the earliest at or after.
+    before = np.maximum.accumulate(np.where(known, frame, -1), axis=1)
+    after = np.minimum.accumulate(np.where(known, frame, xy.shape[1])[:, ::-1], axis=1)[:, ::-1]
+    inner = ~known & (before >= 0) & (after < xy.shape[1])
+    if not inner.any():
+        return
+    track, column = np.nonzero(inner)
+    start, end = before[track, column], after[track, column]
+    fraction = (column - start) / (end - start)
+    xy[track, column] = xy[track, start] + fraction[:, None] * (xy[track, end] - xy[track, start])
