@@ -1,0 +1,5 @@
+"""``python -m app`` runs the ``seedtrack`` command."""
+
+from .cli import main
+
+raise SystemExit(main())

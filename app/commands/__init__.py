@@ -1,0 +1,1 @@
+"""One module per ``seedtrack`` subcommand, each with ``add_parser`` and ``run``."""
