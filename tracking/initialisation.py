@@ -97,7 +97,7 @@ def first_links(
         # One KD query per distinct middle point, with the largest radius any link into it needs.
         widest = np.zeros(unique_middle.size)
         np.maximum.at(widest, inverse, radius)
-        widest = np.where(np.isfinite(widest), widest, np.hypot(*np.ptp(frames[step + 1], axis=0)) + 1.0)
+        widest = np.where(np.isfinite(widest), widest, _extent(frames[step + 1]))
         owner, nxt = _pairs_within(frames[step][unique_middle], widest, frames[step + 1])
         # Expand to (incoming link, next point) for every incoming link through that middle.
         order = np.argsort(inverse, kind="stable")
@@ -140,6 +140,11 @@ def _first_candidates(
     _, index = cKDTree(second).query(first, k=k)
     index = np.asarray(index).reshape(first.shape[0], k)
     return np.repeat(np.arange(first.shape[0]), k), index.ravel()
+
+
+def _extent(points: np.ndarray) -> float:
+    """A radius that reaches every point of the frame from anywhere inside its bounding box."""
+    return float(np.hypot(*np.ptp(points, axis=0))) + 1.0 if len(points) else 1.0
 
 
 def _ranges(counts: np.ndarray) -> np.ndarray:

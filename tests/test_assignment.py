@@ -1,0 +1,43 @@
+import numpy as np
+import pytest
+
+from tracking.assignment import UNASSIGNED, solve_dense, solve_split
+
+
+def random_problem(rng, n_heads, n_measurements, density):
+    mask = rng.random((n_heads, n_measurements)) < density
+    head, measurement = np.nonzero(mask)
+    weight = rng.random(head.size) * 0.1
+    return head, measurement, weight
+
+
+@pytest.mark.parametrize("seed", range(20))
+@pytest.mark.parametrize("corner", [0.0, 0.1])
+def test_split_agrees_with_dense(seed, corner):
+    rng = np.random.default_rng(seed)
+    n_heads, n_measurements = rng.integers(1, 40, size=2)
+    head, measurement, weight = random_problem(rng, n_heads, n_measurements, density=0.08)
+    dense = solve_dense(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    split = solve_split(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    np.testing.assert_array_equal(dense, split)
+
+
+def test_measurement_used_once_and_slaves_for_the_rest():
+    # Two heads want the same measurement; the cheaper one wins, the other takes a slave.
+    result = solve_split(2, 1, np.array([0, 1]), np.array([0, 0]), np.array([0.01, 0.05]), 0.1)
+    np.testing.assert_array_equal(result, [0, UNASSIGNED])
+
+
+def test_zero_corner_prefers_more_links_than_phi_corner():
+    # Head 0 likes measurement 0 best; taking measurement 1 instead lets head 1 link too.
+    head = np.array([0, 0, 1])
+    measurement = np.array([0, 1, 0])
+    weight = np.array([0.01, 0.09, 0.08])
+    np.testing.assert_array_equal(solve_dense(2, 2, head, measurement, weight, 0.1, 0.0), [1, 0])
+    np.testing.assert_array_equal(solve_dense(2, 2, head, measurement, weight, 0.1, 0.1), [0, UNASSIGNED])
+
+
+def test_no_pairs_gives_all_slaves():
+    empty = np.empty(0, np.int64)
+    result = solve_split(3, 2, empty, empty, np.empty(0), 0.1)
+    np.testing.assert_array_equal(result, [UNASSIGNED] * 3)

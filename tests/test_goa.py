@@ -1,0 +1,118 @@
+"""GOA and GOA-updown on small exact scenes and on generated rotating dishes."""
+
+import numpy as np
+import pytest
+
+from data.dish import DishSpec, make_dish_scene
+from tracking.goa import GOAConfig, goa, goa_updown
+from tracking.metrics import score_tracks
+from tracking.tracks import NO_MEASUREMENT, Tracks
+
+
+def crossing_scene():
+    """Two points crossing on straight lines over 8 frames (paper Fig. 5 in spirit).
+
+    p1 moves right and a little down, p2 moves left and a little down; they cross between
+    frames 3 and 4. p1 is missed in frame 3 and p2 in frame 4 (0-based).
+    """
+    t = np.arange(8.0)
+    p1 = np.column_stack((10 + 6 * t, 20 + 1.0 * t))
+    p2 = np.column_stack((52 - 6 * t, 21 + 0.8 * t))
+    frames = []
+    for k in range(8):
+        points = []
+        if k != 3:
+            points.append(p1[k])
+        if k != 4:
+            points.append(p2[k])
+        frames.append(np.array(points))
+    return frames, p1, p2
+
+
+def test_crossing_points_with_misses_are_linked_and_gaps_interpolated():
+    frames, p1, p2 = crossing_scene()
+    tracks = goa_updown(frames, GOAConfig(d_max=20, phi_max=0.1))
+    assert tracks.n_tracks == 2
+    start = {tuple(np.round(tracks.xy[i, 0], 6)): i for i in range(2)}
+    first, second = start[tuple(p1[0])], start[tuple(p2[0])]
+    np.testing.assert_allclose(tracks.xy[first], p1, atol=1e-9)
+    np.testing.assert_allclose(tracks.xy[second], p2, atol=1e-9)
+    assert tracks.interpolated[first].tolist() == [k == 3 for k in range(8)]
+    assert tracks.interpolated[second].tolist() == [k == 4 for k in range(8)]
+
+
+@pytest.mark.parametrize("phi_max", [0.05, 0.1, 0.3, 1.0])
+def test_crossing_with_given_first_links_over_phi_sweep(phi_max):
+    frames, p1, p2 = crossing_scene()
+    tracks = goa(frames, np.array([[0, 0], [1, 1]]), GOAConfig(d_max=20, phi_max=phi_max))
+    np.testing.assert_allclose(tracks.xy[0], p1, atol=1e-9)
+    np.testing.assert_allclose(tracks.xy[1], p2, atol=1e-9)
+
+
+def test_false_detection_goes_to_a_false_track():
+    t = np.arange(6.0)
+    path = np.column_stack((5 + 4 * t, 5 + 3 * t))
+    frames = [path[k : k + 1] for k in range(6)]
+    frames[3] = np.vstack((frames[3], [[40.0, 2.0]]))
+    tracks = goa_updown(frames, GOAConfig(d_max=10))
+    assert tracks.n_tracks == 1
+    np.testing.assert_allclose(tracks.xy[0], path)
+    assert not tracks.interpolated.any()
+
+
+def test_trailing_slaves_have_no_position():
+    frames = [np.array([[0.0, 0.0]]), np.array([[2.0, 0.0]]), np.array([[4.0, 0.0]]), np.empty((0, 2))]
+    tracks = goa_updown(frames, GOAConfig(d_max=5))
+    assert tracks.present[0].tolist() == [True, True, True, False]
+    assert tracks.measurement[0, 3] == NO_MEASUREMENT
+
+
+def test_single_frame_gives_one_point_tracks():
+    tracks = goa_updown([np.array([[1.0, 2.0], [3.0, 4.0]])])
+    assert tracks.n_tracks == 2 and tracks.n_frames == 1
+
+
+def shuffled_frames(truth: Tracks, seed: int):
+    """Measurements per frame in random order, as a detector would list them."""
+    rng = np.random.default_rng(seed)
+    return [truth.xy[rng.permutation(truth.n_tracks), k] for k in range(truth.n_frames)]
+
+
+@pytest.mark.parametrize("seed", range(1, 11))
+def test_default_dish_all_80_seeds_correct(seed):
+    truth = make_dish_scene(DishSpec(random_seed=seed)).truth
+    tracks = goa_updown(shuffled_frames(truth, seed))
+    scores = score_tracks(tracks, truth, tolerance=1e-6)
+    assert scores.correct_tracks == 80
+
+
+@pytest.mark.parametrize("d_max", [45, 60, 100, 200])
+def test_dish_insensitive_to_d_max(d_max):
+    for seed in (1, 2, 3):
+        truth = make_dish_scene(DishSpec(random_seed=seed)).truth
+        tracks = goa_updown(shuffled_frames(truth, seed), GOAConfig(d_max=d_max))
+        assert score_tracks(tracks, truth, tolerance=1e-6).correct_tracks == 80
+
+
+def test_paper_initialisation_fails_where_lookahead_succeeds():
+    truth = make_dish_scene(DishSpec(random_seed=1)).truth
+    frames = shuffled_frames(truth, 1)
+    paper = score_tracks(goa_updown(frames, GOAConfig(d_max=200, initialisation="im1")), truth, 1e-6)
+    ours = score_tracks(goa_updown(frames, GOAConfig(d_max=200)), truth, 1e-6)
+    assert paper.correct_tracks < 80 == ours.correct_tracks
+
+
+@pytest.mark.parametrize("solver", ["dense", "split"])
+def test_dense_and_split_solvers_give_the_same_tracks(solver):
+    truth = make_dish_scene(DishSpec(random_seed=4)).truth
+    frames = shuffled_frames(truth, 4)
+    reference = goa_updown(frames, GOAConfig(d_max=100, solver="dense"))
+    other = goa_updown(frames, GOAConfig(d_max=100, solver=solver))
+    np.testing.assert_array_equal(reference.measurement, other.measurement)
+
+
+def test_config_rejects_nonsense():
+    with pytest.raises(ValueError, match="phi_max"):
+        GOAConfig(phi_max=0)
+    with pytest.raises(ValueError, match="d_max"):
+        GOAConfig(d_max=-3)

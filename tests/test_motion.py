@@ -1,0 +1,54 @@
+import numpy as np
+import pytest
+
+from tracking.motion import CombinedModel, IndividualModel, smooth_motion_cost, smooth_motion_speed_ratio_limit
+
+
+def test_im2_is_zero_for_unchanged_motion_and_grows_with_turning():
+    v0 = np.array([[3.0, 0.0]] * 3)
+    v1 = np.array([[3.0, 0.0], [0.0, 3.0], [-3.0, 0.0]])
+    cost = smooth_motion_cost(v0, v1, 0.1, 0.9)
+    assert cost[0] == pytest.approx(0.0, abs=1e-9)
+    assert cost[1] == pytest.approx(0.1)
+    assert cost[2] == pytest.approx(0.2)
+
+
+def test_im2_speed_term():
+    cost = smooth_motion_cost(np.array([[1.0, 0.0]]), np.array([[4.0, 0.0]]), 0.0, 1.0)
+    assert cost[0] == pytest.approx(1 - 2 * 2 / 5, rel=1e-3)
+
+
+def test_im2_zero_vectors_are_defined():
+    cost = smooth_motion_cost(np.zeros((1, 2)), np.zeros((1, 2)), 0.1, 0.9)
+    assert cost[0] == pytest.approx(0.0)
+    cost = smooth_motion_cost(np.zeros((1, 2)), np.array([[5.0, 0.0]]), 0.1, 0.9)
+    assert cost[0] == pytest.approx(0.9, abs=0.05)
+
+
+@pytest.mark.parametrize("phi_max", [0.05, 0.1, 0.3])
+def test_speed_ratio_limit_is_where_the_speed_term_reaches_phi(phi_max):
+    ratio = smooth_motion_speed_ratio_limit(phi_max, 0.9)
+    cost = smooth_motion_cost(np.array([[10.0, 0.0]]), np.array([[10.0 * ratio, 0.0]]), 0.1, 0.9)
+    assert cost[0] == pytest.approx(phi_max, rel=1e-3)
+
+
+def test_unbounded_speed_ratio_when_phi_exceeds_the_weight():
+    assert smooth_motion_speed_ratio_limit(1.0, 0.9) == np.inf
+
+
+def test_cm1_exponent_and_cm2_reduces_to_cm1():
+    cost = np.array([0.02, 0.05, 0.08])
+    head = np.array([0, 0, 1])
+    measurement = np.array([0, 1, 1])
+    np.testing.assert_allclose(CombinedModel("cm1", z=2).weights(cost, head, measurement), cost**2)
+    np.testing.assert_allclose(CombinedModel("cm2", w1=0, w2=0).weights(cost, head, measurement), cost)
+    cm2 = CombinedModel("cm2", w1=0.5, w2=0.5).weights(cost, head, measurement)
+    # Pair (0, 0): alternative of head 0 costs 0.05, no competitor for measurement 0.
+    assert cm2[0] == pytest.approx(0.02 - 0.5 * 0.05)
+
+
+def test_model_names_are_checked():
+    with pytest.raises(ValueError, match="individual model"):
+        IndividualModel("im9")
+    with pytest.raises(ValueError, match="combined model"):
+        CombinedModel("cm3")
