@@ -1,0 +1,371 @@
+"""A synthetic rotating-dish clip with ground truth, like the seed recordings of the paper.
+
+Dark seeds lie on a light dish that turns about its centre at a near-constant angular speed,
+filmed from above at 25 Hz: seeds near the centre move about a pixel per frame, seeds at the rim
+tens of pixels. Positions are in pixels, x to the right and y down, with pixel centres at
+integer coordinates (OpenCV convention); frame indices are 0-based. A positive angle turns the
+dish clockwise on screen, because y points down.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import cv2
+import numpy as np
+
+from tracking.tracks import NO_MEASUREMENT, Tracks
+
+from .csvio import write_table
+from .video import write_video
+
+# Fractions of min(width, height) and of the dish radius, as in the paper's set-up: the dish
+# fills most of the picture, and seeds keep clear of its rim.
+_DISH_RADIUS_FRACTION = 0.46
+_SEED_RADIUS_FRACTION = 0.95
+# Seeds further apart than this many seed lengths never touch, even when turned end to end.
+_SEPARATION_IN_LENGTHS = 2.5
+# Grey levels of the scene before noise.
+_BACKGROUND_GREY = 80.0
+_DISH_GREY_BRIGHTEST = 235.0
+_SEED_GREY_RANGE = (40.0, 60.0)
+# Sub-samples per pixel along each axis when rendering seeds.
+_SUPERSAMPLING = 4
+# Candidate positions drawn per seed before placement gives up: dart throwing slows down
+# sharply as the dish fills, so running out means the spec asks for too many seeds.
+_CANDIDATES_PER_SEED = 200
+# Distinct streams from one random_seed, so that adding a knob never changes the noise.
+_NOISE_STREAM = 1
+
+
+@dataclass(frozen=True)
+class DishSpec:
+    """What to render.
+
+    Attributes
+    ----------
+    seeds : int
+        Number of seeds.
+    frames : int
+        Number of frames.
+    width, height : int
+        Frame size in pixels.
+    rim_speed : float
+        Speed of the dish rim in pixels per frame; the angular speed is rim_speed / radius
+        radians per frame, so seeds (at most 0.95 radius out) move up to 0.95 * rim_speed.
+    random_seed : int
+        Seed of every random choice: same spec, same frames, byte for byte.
+    hidden_probability : float
+        Probability, independently per seed and frame (frame 0 included), that a seed is not
+        drawn.
+    fps : float
+        Frames per second of the clip written by :func:`write_dish_clip`.
+    seed_length, seed_width : float
+        Full lengths of a seed's ellipse axes in pixels.
+    blur_sigma : float
+        Standard deviation of the optical Gaussian blur in pixels (0 for none).
+    noise_sigma : float
+        Standard deviation of the sensor noise in grey levels (0 for none).
+    illumination : float
+        How many grey levels darker the dish gets from its brightest to its dimmest part
+        (vignette plus a linear gradient).
+    speed_jitter : float
+        Relative standard deviation of the angular speed from frame to frame.
+    """
+
+    seeds: int = 80
+    frames: int = 10
+    width: int = 640
+    height: int = 480
+    rim_speed: float = 42.0
+    random_seed: int = 0
+    hidden_probability: float = 0.0
+    fps: float = 25.0
+    seed_length: float = 7.0
+    seed_width: float = 3.5
+    blur_sigma: float = 0.7
+    noise_sigma: float = 2.0
+    illumination: float = 20.0
+    speed_jitter: float = 0.005
+
+    def __post_init__(self) -> None:
+        checks = [
+            (_is_int(self.seeds) and self.seeds >= 0, "seeds must be a whole number >= 0"),
+            (_is_int(self.frames) and self.frames >= 1, "frames must be a whole number >= 1"),
+            (_is_int(self.width) and self.width >= 16, "width must be a whole number >= 16"),
+            (_is_int(self.height) and self.height >= 16, "height must be a whole number >= 16"),
+            (_is_int(self.random_seed) and self.random_seed >= 0, "random_seed must be a whole number >= 0"),
+            (0 <= self.rim_speed < math.inf, "rim_speed must be finite and >= 0"),
+            (0 <= self.hidden_probability <= 1, "hidden_probability must be in [0, 1]"),
+            (0 < self.fps < math.inf, "fps must be finite and > 0"),
+            (0 < self.seed_width <= self.seed_length, "need 0 < seed_width <= seed_length"),
+            (self.seed_length < _DISH_RADIUS_FRACTION * min(self.width, self.height), "seed_length must be smaller than the dish"),
+            (0 <= self.blur_sigma <= 10, "blur_sigma must be in [0, 10]"),
+            (0 <= self.noise_sigma <= 100, "noise_sigma must be in [0, 100]"),
+            (0 <= self.illumination <= 100, "illumination must be in [0, 100]"),
+            (0 <= self.speed_jitter < 1, "speed_jitter must be in [0, 1)"),
+        ]
+        problems = [message for ok, message in checks if not ok]
+        if problems:
+            raise ValueError(f"bad DishSpec: {'; '.join(problems)}")
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
+@dataclass(frozen=True, eq=False)
+class DishScene:
+    """A rendered dish: ground truth and a renderer for each frame.
+
+    Attributes
+    ----------
+    spec : DishSpec
+        What was asked for.
+    truth : Tracks
+        One track per seed over all frames; ``xy`` (seeds, frames, 2) in pixels is defined in
+        every frame, ``measurement`` is the seed index where the seed is drawn and -1 where it
+        is hidden, so hidden positions count as interpolated.
+    visible : ndarray of bool, shape (seeds, frames)
+        Whether each seed is drawn in each frame.
+    centre : tuple of float
+        Dish centre (x, y) in pixels.
+    radius : float
+        Dish radius in pixels.
+    orientation : ndarray of float, shape (seeds, frames)
+        Angle of each seed's long axis from the x axis, radians, clockwise on screen.
+    seed_grey : ndarray of float, shape (seeds,)
+        Grey level of each seed's body.
+    background : ndarray of float32, shape (height, width)
+        The empty dish before blur and noise.
+    """
+
+    spec: DishSpec
+    truth: Tracks
+    visible: np.ndarray
+    centre: tuple[float, float]
+    radius: float
+    orientation: np.ndarray
+    seed_grey: np.ndarray
+    background: np.ndarray
+
+    def render(self, frame_index: int) -> np.ndarray:
+        """Render one frame.
+
+        Parameters
+        ----------
+        frame_index : int
+            0-based frame index, < ``spec.frames``.
+
+        Returns
+        -------
+        ndarray of uint8, shape (height, width, 3)
+            BGR image (all channels equal).
+        """
+        if not _is_int(frame_index) or not 0 <= frame_index < self.spec.frames:
+            raise IndexError(f"frame_index must be in 0..{self.spec.frames - 1}, got {frame_index!r}")
+        shown = self.visible[:, frame_index]
+        image = _draw_seeds(
+            self.background,
+            self.truth.xy[shown, frame_index],
+            self.orientation[shown, frame_index],
+            self.seed_grey[shown],
+            self.spec,
+        )
+        if self.spec.blur_sigma > 0:
+            image = cv2.GaussianBlur(image, (0, 0), self.spec.blur_sigma, borderType=cv2.BORDER_REFLECT)
+        if self.spec.noise_sigma > 0:
+            rng = np.random.default_rng((self.spec.random_seed, _NOISE_STREAM, frame_index))
+            image += np.float32(self.spec.noise_sigma) * rng.standard_normal(image.shape, dtype=np.float32)
+        grey = np.clip(np.rint(image), 0, 255).astype(np.uint8)
+        return cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
+
+    def frames(self) -> Iterator[np.ndarray]:
+        """Yield every frame in order, rendered on demand."""
+        for frame_index in range(self.spec.frames):
+            yield self.render(frame_index)
+
+
+def make_dish_scene(spec: DishSpec) -> DishScene:
+    """Place the seeds, turn the dish and set up rendering; see :class:`DishScene`.
+
+    Raises
+    ------
+    ValueError
+        If the seeds do not fit on the dish at the minimum separation.
+    """
+    rng = np.random.default_rng(spec.random_seed)
+    centre = np.array([(spec.width - 1) / 2, (spec.height - 1) / 2])
+    radius = _DISH_RADIUS_FRACTION * min(spec.width, spec.height)
+    start = _place_seeds(rng, spec.seeds, _SEED_RADIUS_FRACTION * radius, _SEPARATION_IN_LENGTHS * spec.seed_length)
+    angle = _dish_angles(rng, spec.frames, spec.rim_speed / radius, spec.speed_jitter)
+    orientation = rng.uniform(0, np.pi, spec.seeds)[:, None] + angle[None, :]
+    seed_grey = rng.uniform(*_SEED_GREY_RANGE, spec.seeds)
+    visible = rng.random((spec.seeds, spec.frames)) >= spec.hidden_probability
+    xy = centre + _rotate(start, angle)
+    measurement = np.where(visible, np.arange(spec.seeds)[:, None], NO_MEASUREMENT)
+    return DishScene(
+        spec=spec,
+        truth=Tracks(xy=xy, measurement=measurement),
+        visible=visible,
+        centre=(float(centre[0]), float(centre[1])),
+        radius=float(radius),
+        orientation=orientation,
+        seed_grey=seed_grey,
+        background=_empty_dish(spec.width, spec.height, centre, radius, spec.illumination),
+    )
+
+
+def write_dish_clip(spec: DishSpec, out_dir: str | os.PathLike, *, progress=None, crf: int = 14) -> DishScene:
+    """Render a scene to ``out_dir/clip.mp4`` and its truth to ``out_dir/truth.csv``.
+
+    Parameters
+    ----------
+    spec : DishSpec
+        What to render; the clip's frame rate is ``spec.fps``.
+    out_dir : path-like
+        Folder, created if missing.
+    progress : tqdm-like or callable, optional
+        Passed to :func:`data.video.write_video`; ticked once per frame.
+    crf : int
+        x264 quality; the default keeps compression from moving seed centroids by more than a
+        few hundredths of a pixel.
+
+    Returns
+    -------
+    DishScene
+        The scene that was written.
+    """
+    scene = make_dish_scene(spec)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_video(out / "clip.mp4", scene.frames(), spec.fps, crf=crf, progress=progress)
+    write_table(out / "truth.csv", scene.truth.to_rows())
+    return scene
+
+
+def _place_seeds(rng: np.random.Generator, count: int, max_radius: float, separation: float) -> np.ndarray:
+    """Dart throwing: uniform positions (relative to the centre) no closer than ``separation``.
+
+    Returns
+    -------
+    ndarray of float, shape (count, 2)
+    """
+    candidates = _uniform_in_disc(rng, count * _CANDIDATES_PER_SEED, max_radius)
+    placed = np.empty((count, 2))
+    n_placed = 0
+    for candidate in candidates:
+        if n_placed == count:
+            break
+        if np.all(np.sum((placed[:n_placed] - candidate) ** 2, axis=1) >= separation**2):
+            placed[n_placed] = candidate
+            n_placed += 1
+    if n_placed < count:
+        raise ValueError(
+            f"only {n_placed} of {count} seeds fit on the dish {separation:.1f} px apart; "
+            "use fewer seeds, shorter seeds or a larger frame"
+        )
+    return placed
+
+
+def _uniform_in_disc(rng: np.random.Generator, count: int, radius: float) -> np.ndarray:
+    # sqrt makes the density uniform over the area rather than over the radius.
+    r = radius * np.sqrt(rng.random(count))
+    theta = rng.uniform(0, 2 * np.pi, count)
+    return np.column_stack([r * np.cos(theta), r * np.sin(theta)])
+
+
+def _dish_angles(rng: np.random.Generator, frames: int, omega: float, jitter: float) -> np.ndarray:
+    """Cumulative dish angle (radians) at each frame, starting at 0."""
+    steps = omega * (1 + jitter * rng.standard_normal(frames - 1))
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def _rotate(points: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotate (n, 2) points by each of (f,) angles about the origin; returns (n, f, 2)."""
+    cos, sin = np.cos(angle)[None, :], np.sin(angle)[None, :]
+    x, y = points[:, 0:1], points[:, 1:2]
+    return np.stack([x * cos - y * sin, x * sin + y * cos], axis=-1)
+
+
+def _empty_dish(width: int, height: int, centre: np.ndarray, radius: float, illumination: float) -> np.ndarray:
+    """The light dish on a dark background, dimmer towards its rim and to one side."""
+    y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+    dx, dy = (x - np.float32(centre[0])) / radius, (y - np.float32(centre[1])) / radius
+    rho2 = dx * dx + dy * dy
+    # Half vignette, half a gradient towards the bottom right: both between 0 and 1 on the dish.
+    dimming = 0.5 * rho2 + 0.25 * (1 + (dx + dy) / np.float32(math.sqrt(2)))
+    dish = _DISH_GREY_BRIGHTEST - illumination * dimming
+    # Anti-aliased rim: the fraction of each pixel inside the dish, to first order.
+    inside = np.clip(radius - np.sqrt(rho2) * radius + 0.5, 0, 1)
+    return (_BACKGROUND_GREY + inside * (dish - _BACKGROUND_GREY)).astype(np.float32)
+
+
+def _draw_seeds(
+    background: np.ndarray, xy: np.ndarray, orientation: np.ndarray, grey: np.ndarray, spec: DishSpec
+) -> np.ndarray:
+    """Blend seeds into a copy of ``background`` by their exact pixel coverage.
+
+    Returns
+    -------
+    ndarray of float32, shape (height, width)
+    """
+    height, width = background.shape
+    half = int(math.ceil(spec.seed_length / 2)) + 2
+    offsets = np.arange(-half, half + 1)
+    # Each seed gets a square patch of pixels around the pixel nearest its centre.
+    columns = np.rint(xy[:, 0])[:, None].astype(int) + offsets
+    rows = np.rint(xy[:, 1])[:, None].astype(int) + offsets
+    coverage = _ellipse_coverage(columns, rows, xy, orientation, spec.seed_length / 2, spec.seed_width / 2)
+    inside = ((columns >= 0) & (columns < width))[:, None, :] & ((rows >= 0) & (rows < height))[:, :, None]
+    flat = (np.clip(rows, 0, height - 1)[:, :, None] * width + np.clip(columns, 0, width - 1)[:, None, :])[inside]
+    covered = np.bincount(flat, weights=coverage[inside], minlength=height * width)
+    seed_ink = np.bincount(flat, weights=(coverage * grey[:, None, None])[inside], minlength=height * width)
+    # Seeds never overlap (placement keeps them apart), so coverage sums to at most 1.
+    image = background.ravel() * (1 - covered) + seed_ink
+    return image.reshape(height, width).astype(np.float32)
+
+
+def _ellipse_coverage(
+    columns: np.ndarray, rows: np.ndarray, xy: np.ndarray, orientation: np.ndarray, a: float, b: float
+) -> np.ndarray:
+    """Fraction of each patch pixel covered by each seed's ellipse.
+
+    Parameters
+    ----------
+    columns, rows : ndarray of int, shape (n, p)
+        Pixel columns and rows of each seed's patch.
+    xy : ndarray, shape (n, 2)
+        Ellipse centres in pixels.
+    orientation : ndarray, shape (n,)
+        Long-axis angles in radians.
+    a, b : float
+        Semi-axes in pixels.
+
+    Returns
+    -------
+    ndarray, shape (n, p, p)
+        Coverage in [0, 1], indexed [seed, row, column].
+    """
+    s = _SUPERSAMPLING
+    n, p = columns.shape
+    # Sub-sample k of pixel c sits at c + (k + 0.5) / s - 0.5, so that the samples of a pixel
+    # are centred on the pixel centre (integer coordinate).
+    sub = (np.arange(s) + 0.5) / s - 0.5
+    sx = (columns[:, :, None] + sub).reshape(n, 1, p * s) - xy[:, 0, None, None]
+    sy = (rows[:, :, None] + sub).reshape(n, p * s, 1) - xy[:, 1, None, None]
+    cos, sin = np.cos(orientation)[:, None, None], np.sin(orientation)[:, None, None]
+    u = (sx * cos + sy * sin) / a
+    v = (-sx * sin + sy * cos) / b
+    q = np.sqrt(u * u + v * v)
+    # Signed distance to the rim to first order, (q - 1) / |grad q|, in pixels; a linear ramp
+    # one sub-sample wide anti-aliases each sub-sample so that coverage moves smoothly with
+    # sub-pixel shifts instead of in steps.
+    gradient = np.sqrt((u / a) ** 2 + (v / b) ** 2) / np.maximum(q, 1e-9)
+    distance = (q - 1) / np.maximum(gradient, 1e-9)
+    sample_coverage = np.clip(0.5 - distance * s, 0, 1)
+    return sample_coverage.reshape(n, p, s, p, s).mean(axis=(2, 4))

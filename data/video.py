@@ -1,0 +1,239 @@
+"""Video files through PyAV: write H.264 MP4 that plays in a browser, and probe a clip's header.
+
+Frames are uint8 numpy arrays in OpenCV layout: (height, width, 3) BGR or (height, width) gray.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Callable, Iterable
+
+import av
+import cv2
+import numpy as np
+from av.video.reformatter import ColorPrimaries, ColorRange, ColorTrc, Colorspace
+
+from .atomic import atomic_path
+from .errors import DataError
+
+# One encoder thread: x264's output depends on its thread count, so a fixed count is what
+# makes the same frames give the same bytes on every machine.
+_ENCODER_THREADS = "1"
+# Frame rates such as 30000/1001 survive as exact fractions; anything finer is float noise.
+_MAX_RATE_DENOMINATOR = 1001 * 1000
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a video's header says about its first video stream.
+
+    Attributes
+    ----------
+    frame_count : int or None
+        Number of frames, from the header, or estimated from duration and frame rate; None if
+        neither is known.
+    exact : bool
+        Whether ``frame_count`` is the header's count rather than an estimate.
+    fps : float
+        Frames per second (average rate; 25.0 if the file does not say).
+    size : tuple of int
+        (width, height) in pixels.
+    codec : str
+        Decoder name, e.g. ``"h264"``.
+    """
+
+    frame_count: int | None
+    exact: bool
+    fps: float
+    size: tuple[int, int]
+    codec: str
+
+
+def write_video(
+    path: str | os.PathLike,
+    frames: Iterable[np.ndarray],
+    fps: float,
+    *,
+    crf: int = 18,
+    progress: Callable[[int], object] | object | None = None,
+) -> int:
+    """Encode frames as an H.264 (libx264, yuv420p) MP4, atomically and deterministically.
+
+    Parameters
+    ----------
+    path : path-like
+        Output file; it is an MP4 whatever its suffix. Nothing appears under this name unless
+        the whole clip is written.
+    frames : iterable of ndarray of uint8
+        (H, W, 3) BGR or (H, W) gray, all the same size; consumed one at a time. An odd width
+        or height is padded by one pixel (copying the last column or row) on the right or
+        bottom, because yuv420p needs even sizes.
+    fps : float
+        Frames per second, > 0.
+    crf : int
+        x264 constant rate factor, 0 (lossless luma) to 51; 18 is visually lossless.
+    progress : tqdm-like or callable, optional
+        Called with 1 (``progress.update(1)`` if it has ``update``) after each frame.
+
+    Returns
+    -------
+    int
+        Number of frames written.
+
+    Raises
+    ------
+    ValueError
+        If ``fps`` or ``crf`` is out of range, there are no frames, or a frame has the wrong
+        type or size.
+    DataError
+        If the output folder does not exist or cannot be written.
+    """
+    if not fps > 0:
+        raise ValueError(f"fps must be > 0, got {fps}")
+    if not 0 <= crf <= 51:
+        raise ValueError(f"crf must be in 0..51, got {crf}")
+    tick = _ticker(progress)
+    with atomic_path(path) as temporary:
+        # faststart puts the index before the data: browsers start playing at once, and a
+        # truncated file still opens and decodes up to where it was cut.
+        with av.open(str(temporary), "w", format="mp4", options={"movflags": "+faststart"}) as container:
+            count = _encode_all(container, frames, fps, crf, tick)
+    return count
+
+
+def _ticker(progress) -> Callable[[], None]:
+    if progress is None:
+        return lambda: None
+    update = progress.update if hasattr(progress, "update") else progress
+    return lambda: update(1)
+
+
+def _encode_all(container, frames: Iterable[np.ndarray], fps: float, crf: int, tick) -> int:
+    stream = None
+    shape = None
+    count = 0
+    for frame in frames:
+        frame = np.asarray(frame)
+        _check_frame(frame, shape, count)
+        if stream is None:
+            shape = frame.shape
+            stream = _add_stream(container, shape, fps, crf)
+        container.mux(stream.encode(av.VideoFrame.from_ndarray(_to_yuv420p(frame), format="yuv420p")))
+        count += 1
+        tick()
+    if stream is None:
+        raise ValueError("no frames to write")
+    container.mux(stream.encode(None))
+    return count
+
+
+def _check_frame(frame: np.ndarray, shape: tuple[int, ...] | None, index: int) -> None:
+    """Raise ValueError unless ``frame`` is uint8 gray or BGR of the first frame's ``shape``."""
+    if frame.dtype != np.uint8:
+        raise ValueError(f"frame {index}: dtype must be uint8, got {frame.dtype}")
+    if not (frame.ndim == 2 or (frame.ndim == 3 and frame.shape[2] == 3)):
+        raise ValueError(f"frame {index}: shape must be (H, W, 3) or (H, W), got {frame.shape}")
+    if shape is not None and frame.shape != shape:
+        raise ValueError(f"frame {index}: shape {frame.shape} differs from the first frame's {shape}")
+
+
+def _add_stream(container, shape: tuple[int, ...], fps: float, crf: int):
+    rate = Fraction(fps).limit_denominator(_MAX_RATE_DENOMINATOR)
+    stream = container.add_stream("libx264", rate=rate)
+    stream.width = shape[1] + shape[1] % 2
+    stream.height = shape[0] + shape[0] % 2
+    stream.pix_fmt = "yuv420p"
+    stream.options = {"crf": str(crf), "threads": _ENCODER_THREADS}
+    # Tag the BT.601 limited-range conversion of _to_yuv420p; untagged HD video is decoded as
+    # BT.709 by browsers, which would shift colours.
+    context = stream.codec_context
+    context.colorspace = Colorspace.ITU601
+    context.color_primaries = ColorPrimaries.SMPTE170M
+    context.color_trc = ColorTrc.SMPTE170M
+    context.color_range = ColorRange.MPEG
+    return stream
+
+
+def _to_yuv420p(frame: np.ndarray) -> np.ndarray:
+    """BT.601 limited-range I420 planes stacked as ((H * 3) // 2, W) uint8, padded to even size."""
+    bgr = _pad_even(frame if frame.ndim == 3 else cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR))
+    # OpenCV rounds correctly; swscale's default BGR-to-YUV path truncates luma and shifts
+    # chroma, which tints and darkens grey by several levels. FFmpeg's decoder undoes this
+    # conversion exactly.
+    return cv2.cvtColor(bgr, cv2.COLOR_BGR2YUV_I420)
+
+
+def _pad_even(frame: np.ndarray) -> np.ndarray:
+    pad_rows, pad_columns = frame.shape[0] % 2, frame.shape[1] % 2
+    if not (pad_rows or pad_columns):
+        return frame
+    widths = ((0, pad_rows), (0, pad_columns)) + ((0, 0),) * (frame.ndim - 2)
+    return np.pad(frame, widths, mode="edge")
+
+
+def probe_video(path: str | os.PathLike) -> VideoInfo:
+    """Read a video's header: frame count, frame rate, size and codec of its first video stream.
+
+    Raises
+    ------
+    DataError
+        If the file is missing, is not a video PyAV can open, or has no video stream.
+    """
+    container = open_container(path)
+    try:
+        return video_info(container.streams.video[0])
+    finally:
+        container.close()
+
+
+def open_container(path: str | os.PathLike):
+    """Open a video for reading with PyAV, turning failures into one-line ``DataError``.
+
+    Returns
+    -------
+    av.container.InputContainer
+        Open container with at least one video stream; the caller closes it.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataError(path, "no such file or folder")
+    try:
+        container = av.open(str(path))
+    except av.FFmpegError as error:
+        raise DataError(path, f"not a video this program can read ({ffmpeg_reason(error)})") from None
+    if not container.streams.video:
+        container.close()
+        raise DataError(path, "has no video stream")
+    return container
+
+
+def video_info(stream) -> VideoInfo:
+    """Header facts of an open PyAV video stream; see :class:`VideoInfo`."""
+    rate = stream.average_rate or stream.guessed_rate
+    fps = float(rate) if rate else 25.0
+    return VideoInfo(
+        frame_count=_frame_count(stream, fps),
+        exact=bool(stream.frames),
+        fps=fps,
+        size=(stream.codec_context.width, stream.codec_context.height),
+        codec=stream.codec_context.name,
+    )
+
+
+def _frame_count(stream, fps: float) -> int | None:
+    if stream.frames:
+        return int(stream.frames)
+    # Containers such as raw streams or some AVIs do not store a count; the duration is the
+    # next best thing and may be off by a frame.
+    duration = stream.duration * stream.time_base if stream.duration and stream.time_base else None
+    if duration is None and stream.container.duration:
+        duration = stream.container.duration / av.time_base
+    return int(round(float(duration) * fps)) if duration else None
+
+
+def ffmpeg_reason(error: Exception) -> str:
+    """The FFmpeg message of a PyAV error without the file name PyAV appends, for one-line errors."""
+    return getattr(error, "strerror", None) or str(error)
