@@ -14,6 +14,7 @@ import numpy as np
 from data.csvio import write_table
 from data.errors import DataError
 from data.frames import open_frames
+from data.trackfile import write_tracks
 from data.video import write_video
 from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, detect_blobs
 from tracking.goa import GOAConfig, goa_updown, pass_steps
@@ -86,13 +87,6 @@ def track_detections(detections: Detections, config: GOAConfig) -> Tracks:
         return goa_updown(detections.points, config, progress=bar.update)
 
 
-def track_rows(tracks: Tracks, frame_indices: np.ndarray) -> dict[str, np.ndarray]:
-    """Columns of ``tracks.csv``, with frames numbered as in the clip."""
-    rows = tracks.to_rows()
-    rows["frame"] = frame_indices[rows["frame"] - tracks.first_frame]
-    return rows
-
-
 def render_overlay(path: Path, tracks: Tracks, frame_indices: np.ndarray, out: Path, fps: float, trail: int = 10) -> None:
     """Write an H.264 clip of the input with every track's trail and id drawn over it."""
     column_of_frame = {int(index): column for column, index in enumerate(frame_indices)}
@@ -127,6 +121,6 @@ def run_pipeline(clip: Path, out: Path, options: BlobOptions, config: GOAConfig)
     detections, fps = detect_clip(clip, options)
     write_table(out / "detections.csv", detections.to_rows())
     tracks = track_detections(detections, config)
-    write_table(out / "tracks.csv", track_rows(tracks, detections.frame_indices))
+    write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
     render_overlay(clip, tracks, detections.frame_indices, out / "overlay.mp4", fps)
     return detections, tracks

@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from data.csvio import read_table
 from data.dish import DishSpec, write_dish_clip
+from data.trackfile import read_tracks
 from detection.blobs import BlobOptions
 from tracking.metrics import score_tracks
-from tracking.tracks import Tracks
 
 from ..errors import UsageError
 from ..pipeline import prepare_output_folder, run_pipeline
@@ -54,8 +53,7 @@ def run(args: argparse.Namespace) -> int:
     prepare_output_folder(args.out)
     scene = write_dish_clip(spec, args.out)
     run_pipeline(args.out / "clip.mp4", args.out, BlobOptions(), config)
-    written = read_table(args.out / "tracks.csv", required=("track_id", "frame", "x", "y"))
-    result = Tracks.from_rows(written["track_id"], written["frame"], written["x"], written["y"], written.get("interpolated"))
+    result = read_tracks(args.out / "tracks.csv")
     scores = score_tracks(result, scene.truth, args.tol)
     print(
         f"{scores.correct_tracks} of {scores.true_tracks} seeds tracked correctly over all {spec.frames} frames "
