@@ -1,0 +1,66 @@
+"""MOTChallenge text: ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z``, one box a line.
+
+Conversions: MOTChallenge frames count from 1, ours from 0, so ``frame = mot_frame - 1`` on
+reading and ``mot_frame = frame + 1`` on writing. A point is the centre of its box,
+``(bb_left + bb_width / 2, bb_top + bb_height / 2)``, in the file's pixel coordinates; the point
+variant is a box of zero size, whose centre is its corner. Files with 6 or more fields a line
+are accepted (MOT15 detections, MOT16/17 ground truth with class and visibility columns); fields
+after the box are ignored, so every row is read, whatever its confidence or class. Fields are
+separated by commas or white space. The writer writes point boxes: ``bb_width = bb_height = 0``,
+``conf = 1`` and ``x = y = z = -1`` (no world coordinates).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import atomic_path
+from ..errors import DataError
+from .rows import Rows
+
+_SEPARATOR = re.compile(r"[,\s]+")
+_FIELDS = 6
+
+
+def read(path) -> Rows:
+    """Rows of a MOTChallenge file (blank lines and lines starting with ``#`` are skipped)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(path, "no such file")
+    values, lines = [], []
+    with open(path) as handle:
+        for number, text in enumerate(handle, start=1):
+            text = text.strip()
+            if not text or text.startswith("#"):
+                continue
+            fields = _SEPARATOR.split(text.strip(", \t"))
+            if len(fields) < _FIELDS:
+                raise DataError(path, f"line {number}: {len(fields)} fields; MOTChallenge needs at least frame,id,bb_left,bb_top,bb_width,bb_height")
+            try:
+                numbers = [float(field) for field in fields[:_FIELDS]]
+            except ValueError:
+                raise DataError(path, f"line {number}: a field of frame,id,bb_left,bb_top,bb_width,bb_height is not a number") from None
+            if numbers[0] != round(numbers[0]) or numbers[1] != round(numbers[1]):
+                raise DataError(path, f"line {number}: frame and id must be whole numbers")
+            values.append(numbers)
+            lines.append(number)
+    table = np.array(values, dtype=float).reshape(-1, _FIELDS)
+    frame = table[:, 0].astype(np.int64)
+    early = np.flatnonzero(frame < 1)
+    if early.size:
+        raise DataError(path, f"line {lines[early[0]]}: frame {frame[early[0]]}; MOTChallenge frames count from 1")
+    x = table[:, 2] + table[:, 4] / 2
+    y = table[:, 3] + table[:, 5] / 2
+    return Rows(table[:, 1].astype(np.int64), frame - 1, x, y, np.array(lines, dtype=np.int64))
+
+
+def write(path, rows: dict[str, np.ndarray]) -> None:
+    """Write tracks as MOTChallenge point boxes (1-based frames), sorted by frame then id, atomically."""
+    order = np.lexsort((rows["track_id"], rows["frame"]))
+    with atomic_path(path) as temporary:
+        with open(temporary, "w") as handle:
+            for i in order:
+                handle.write(f"{rows['frame'][i] + 1},{rows['track_id'][i]},{rows['x'][i]:.4f},{rows['y'][i]:.4f},0,0,1,-1,-1,-1\n")

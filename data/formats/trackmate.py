@@ -1,0 +1,93 @@
+"""TrackMate XML (Fiji): ``Model/AllSpots/SpotsInFrame/Spot`` and ``Model/AllTracks/Track/Edge``.
+
+A spot carries ``ID``, ``FRAME`` (0-based, as ours) and ``POSITION_X``/``POSITION_Y``, read as
+pixels (TrackMate writes calibrated units when the image is calibrated; the model's
+``spatialunits`` attribute says which). A track is the set of spots its edges
+(``SPOT_SOURCE_ID``, ``SPOT_TARGET_ID``) join, under its ``TRACK_ID``. When the file lists
+``FilteredTracks``, only those tracks are read, as TrackMate shows them. Spots on no track
+(unlinked detections) are not tracks and are skipped, so a track of a single point cannot be
+stored in this format: the writer leaves such tracks out. A track that splits or merges has two
+spots in one frame and is rejected.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+from ..errors import DataError
+from .rows import Rows
+from .xmltree import number, parse_xml, write_xml
+
+
+def read(path) -> Rows:
+    """Rows of a TrackMate file: one per spot on a track."""
+    root = parse_xml(path)
+    model = root.find("Model") if root.tag == "TrackMate" else None
+    if model is None:
+        raise DataError(path, f"line {root.line}: not a TrackMate file (expected <TrackMate><Model>, found <{root.tag}>)")
+    spots = {}
+    for spot in model.iter("Spot"):
+        spot_id = int(number(path, spot, "ID", whole=True))
+        spots[spot_id] = (int(number(path, spot, "FRAME", whole=True)), number(path, spot, "POSITION_X"), number(path, spot, "POSITION_Y"), spot.line)
+    shown = model.find("FilteredTracks")
+    keep = None if shown is None else {int(number(path, t, "TRACK_ID", whole=True)) for t in shown.iter("TrackID")}
+    rows = []
+    all_tracks = model.find("AllTracks")
+    for track in all_tracks.iter("Track") if all_tracks is not None else ():
+        track_id = int(number(path, track, "TRACK_ID", whole=True))
+        if keep is not None and track_id not in keep:
+            continue
+        members = set()
+        for edge in track.iter("Edge"):
+            for end in ("SPOT_SOURCE_ID", "SPOT_TARGET_ID"):
+                spot_id = int(number(path, edge, end, whole=True))
+                if spot_id not in spots:
+                    raise DataError(path, f"line {edge.line}: edge names spot {spot_id}, which is not in AllSpots")
+                members.add(spot_id)
+        rows.extend((track_id, *spots[spot_id]) for spot_id in sorted(members))
+    table = np.array(rows, dtype=float).reshape(-1, 5)
+    return Rows(table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3], table[:, 4].astype(np.int64))
+
+
+def write(path, rows: dict[str, np.ndarray]) -> None:
+    """Write tracks as a TrackMate model (pixels, frames), atomically; single-point tracks are left out."""
+    ids, counts = np.unique(rows["track_id"], return_counts=True)
+    linked = np.isin(rows["track_id"], ids[counts > 1])
+    order = np.flatnonzero(linked)[np.lexsort((rows["track_id"][linked], rows["frame"][linked]))]
+    root = ET.Element("TrackMate", version="7.0.0")
+    model = ET.SubElement(root, "Model", spatialunits="pixel", timeunits="frame")
+    all_spots = ET.SubElement(model, "AllSpots", nspots=str(order.size))
+    # Spot ids are row positions in frame order, so the same tracks give the same file.
+    spot_id = np.empty(rows["frame"].size, dtype=np.int64)
+    spot_id[order] = np.arange(order.size)
+    frames_element = {}
+    for i in order:
+        frame = int(rows["frame"][i])
+        if frame not in frames_element:
+            frames_element[frame] = ET.SubElement(all_spots, "SpotsInFrame", frame=str(frame))
+        ET.SubElement(
+            frames_element[frame],
+            "Spot",
+            ID=str(spot_id[i]),
+            name=f"ID{spot_id[i]}",
+            FRAME=str(frame),
+            POSITION_X=f"{rows['x'][i]:.4f}",
+            POSITION_Y=f"{rows['y'][i]:.4f}",
+            POSITION_Z="0.0",
+            POSITION_T=f"{float(frame)}",
+            QUALITY="1.0",
+            RADIUS="1.0",
+            VISIBILITY="1",
+        )
+    all_tracks = ET.SubElement(model, "AllTracks")
+    filtered = ET.SubElement(model, "FilteredTracks")
+    for track_id in ids[counts > 1]:
+        members = np.flatnonzero(rows["track_id"] == track_id)
+        members = members[np.argsort(rows["frame"][members])]
+        track = ET.SubElement(all_tracks, "Track", name=f"Track_{track_id}", TRACK_ID=str(track_id), NUMBER_SPOTS=str(members.size))
+        for source, target in zip(members[:-1], members[1:]):
+            ET.SubElement(track, "Edge", SPOT_SOURCE_ID=str(spot_id[source]), SPOT_TARGET_ID=str(spot_id[target]), EDGE_TIME=f"{rows['frame'][source] + 0.5}")
+        ET.SubElement(filtered, "TrackID", TRACK_ID=str(track_id))
+    write_xml(path, root)
