@@ -12,10 +12,10 @@ from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import demo, run
+from .commands import correct, demo, evaluate, review, run
 from .errors import UsageError
 
-COMMANDS = (run, demo)
+COMMANDS = (run, demo, evaluate, correct, review)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

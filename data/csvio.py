@@ -25,6 +25,8 @@ _FLOAT_FORMAT = "{:.4f}"
 
 
 def _format_column(values: np.ndarray) -> list[str]:
+    if values.dtype.kind in "OUS":
+        return [str(v) for v in values]
     if np.issubdtype(values.dtype, np.integer) or values.dtype == bool:
         return [str(int(v)) for v in values]
     return ["" if np.isnan(v) else _FLOAT_FORMAT.format(v) for v in values.astype(float)]
@@ -39,7 +41,7 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
         Output file; replaced only once the whole table is written.
     columns : dict of str to ndarray
         Column name to 1-D array; integer and boolean columns are written as integers, float
-        columns with four decimals.
+        columns with four decimals, text (object or string) columns as they are.
     """
     names = list(columns)
     lengths = {len(columns[name]) for name in names}

@@ -53,6 +53,26 @@ def match_points(result: Tracks, truth: Tracks, tolerance: float) -> np.ndarray:
     return matched
 
 
+def true_track_owners(matched: np.ndarray, result: Tracks, truth: Tracks) -> np.ndarray:
+    """Invert :func:`match_points`: the result track standing for each true point.
+
+    Parameters
+    ----------
+    matched : ndarray of int, shape (result.n_tracks, result.n_frames)
+        As returned by :func:`match_points`.
+    result, truth : Tracks
+
+    Returns
+    -------
+    ndarray of int, shape (truth.n_tracks, truth.n_frames)
+        Row index into ``result`` of the track matched to the true point, or -1.
+    """
+    owner = np.full(truth.measurement.shape, UNMATCHED, dtype=np.int64)
+    rows, columns = np.nonzero(matched != UNMATCHED)
+    owner[matched[rows, columns], columns + result.first_frame - truth.first_frame] = rows
+    return owner
+
+
 @dataclass(frozen=True)
 class TrackScores:
     """The paper's measures of a track set against the truth.
@@ -105,11 +125,7 @@ def score_tracks(result: Tracks, truth: Tracks, tolerance: float = 1.0) -> Track
     tolerance : float
         Matching distance, pixels.
     """
-    matched = match_points(result, truth, tolerance)
-    # owner[t, k]: the result track standing for true track t in truth column k, or -1.
-    owner = np.full(truth.measurement.shape, UNMATCHED, dtype=np.int64)
-    rows, columns = np.nonzero(matched != UNMATCHED)
-    owner[matched[rows, columns], columns + result.first_frame - truth.first_frame] = rows
+    owner = true_track_owners(match_points(result, truth, tolerance), result, truth)
     measured = truth.present & (truth.measurement != NO_MEASUREMENT)
 
     correct = 0

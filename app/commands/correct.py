@@ -1,0 +1,34 @@
+"""``seedtrack correct TRACKS.csv EDITS.txt --out TRUTH.csv``: apply a corrections file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from data.corrections import apply_corrections, read_corrections
+from data.trackfile import FORMATS, read_tracks, write_tracks
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "correct",
+        help="apply hand edits to tracks, to make ground truth",
+        description="Apply the edits in EDITS.txt (one a line: join A B FRAME, swap A B FRAME, split A FRAME "
+        "[NEW_ID], delete A [FRAME], move A FRAME X Y, add A FRAME X Y; # comments) to TRACKS and write the "
+        "result. Every line is checked; on any error nothing is written.",
+    )
+    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to correct (any track format)")
+    parser.add_argument("edits", type=Path, metavar="EDITS", help="corrections file")
+    parser.add_argument("--out", type=Path, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt or .xml)")
+    parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    parser.add_argument("--out-format", choices=sorted(FORMATS), default=None, help="format of the output (default: from its extension)")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    tracks = read_tracks(args.tracks, args.format)
+    edits = read_corrections(args.edits)
+    corrected = apply_corrections(tracks, edits, args.edits)
+    write_tracks(args.out, corrected, format=args.out_format)
+    print(f"applied {len(edits)} edits: {tracks.n_tracks} tracks in, {corrected.n_tracks} out; wrote {args.out}")
+    return 0

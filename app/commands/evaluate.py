@@ -1,0 +1,112 @@
+"""``seedtrack evaluate TRACKS --truth TRUTH``: score a track set against ground truth."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from data.atomic import atomic_path
+from data.csvio import write_table
+from data.trackfile import FORMATS, read_tracks
+from tracking.clear_mot import clear_mot
+from tracking.diagnosis import first_errors
+from tracking.metrics import score_tracks
+
+from ..error_plot import draw_error_plot, write_png
+from ..errors import UsageError
+from ..pipeline import prepare_output_folder
+
+DEFAULT_TOLERANCE = 3.0
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "evaluate",
+        help="score tracks against ground truth",
+        description="Match result points to true points frame by frame (one to one, within --tol, by optimal "
+        "assignment) and report the paper's strict track error, relaxed trajectory merit and link error, and "
+        "ID switches, fragmentations, MOTA, MOTP and IDF1 as py-motmetrics computes them. With --out, also "
+        "write DIR/evaluation.json, DIR/wrong_tracks.csv and DIR/errors.png.",
+    )
+    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="result tracks (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
+    parser.add_argument("--truth", type=Path, required=True, metavar="TRUTH", help="true tracks, in any of the same formats")
+    parser.add_argument("--tol", type=float, default=DEFAULT_TOLERANCE, metavar="PX", help=f"matching distance in pixels (default {DEFAULT_TOLERANCE:g})")
+    parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    parser.add_argument("--truth-format", choices=sorted(FORMATS), default=None, help="format of TRUTH (default: from the extension and contents)")
+    parser.add_argument("--out", type=Path, default=None, metavar="DIR", help="folder for evaluation.json, wrong_tracks.csv and errors.png")
+    parser.set_defaults(run=run)
+
+
+def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_format: str | None = None, truth_format: str | None = None):
+    """Read both files and compute every measure.
+
+    Returns
+    -------
+    measures : dict
+        Name to value, in report order (rates in [0, 1], MOTP in pixels).
+    clear : ClearMotScores
+        With the per-frame counts.
+    wrong : dict of str to ndarray
+        :func:`tracking.diagnosis.first_errors` of the result.
+    """
+    result = read_tracks(tracks_path, tracks_format)
+    truth = read_tracks(truth_path, truth_format)
+    paper = score_tracks(result, truth, tolerance)
+    clear = clear_mot(result, truth, tolerance)
+    measures = {
+        "tracks": str(tracks_path),
+        "truth": str(truth_path),
+        "tolerance_px": tolerance,
+        "true_tracks": paper.true_tracks,
+        "result_tracks": result.n_tracks,
+        "correct_tracks": paper.correct_tracks,
+        "track_error": paper.track_error,
+        "relaxed_correct": paper.relaxed_correct,
+        "relaxed_merit": 1.0 - paper.relaxed_error,
+        "true_links": paper.true_links,
+        "correct_links": paper.correct_links,
+        "link_error": paper.link_error,
+        "true_points": clear.num_objects,
+        "result_points": clear.num_predictions,
+        "misses": clear.num_misses,
+        "false_positives": clear.num_false_positives,
+        "id_switches": clear.num_switches,
+        "fragmentations": clear.num_fragmentations,
+        "mota": clear.mota,
+        "motp_px": clear.motp,
+        "idf1": clear.idf1,
+        "idp": clear.idp,
+        "idr": clear.idr,
+    }
+    return measures, clear, first_errors(result, truth, tolerance)
+
+
+def format_table(measures: dict) -> str:
+    """The measures as a two-column text table."""
+    width = max(len(name) for name in measures)
+    lines = []
+    for name, value in measures.items():
+        text = f"{value:.6f}" if isinstance(value, float) else str(value)
+        lines.append(f"{name:<{width}}  {text}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    if not (args.tol > 0 and math.isfinite(args.tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
+    measures, clear, wrong = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
+    print(format_table(measures))
+    if args.out is not None:
+        prepare_output_folder(args.out)
+        with atomic_path(args.out / "evaluation.json") as temporary:
+            # JSON has no NaN: a measure undefined for empty input is written as null.
+            clean = {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in measures.items()}
+            temporary.write_text(json.dumps(clean, indent=2) + "\n")
+        write_table(args.out / "wrong_tracks.csv", wrong)
+        series = {"missed": clear.frame_misses, "false positives": clear.frame_false_positives, "ID switches": clear.frame_switches}
+        title = f"errors per frame: {args.tracks.name} against {args.truth.name}, tolerance {args.tol:g} px"
+        write_png(args.out / "errors.png", draw_error_plot(clear.frames, series, title))
+        print(f"wrote {args.out / 'evaluation.json'}, {args.out / 'wrong_tracks.csv'}, {args.out / 'errors.png'}")
+    return 0
