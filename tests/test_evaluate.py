@@ -99,3 +99,12 @@ def test_review_pages_show_every_track(tmp_path):
     truth = read_tracks(clip / "truth.csv")
     for x, y in np.round(truth.xy[:, 0] * 4 + 1.5).astype(int):
         assert coloured[y - 30 : y, x + 5 : x + 40].sum() > 20
+
+
+def test_evaluate_an_empty_result(tmp_path):
+    write_tracks(tmp_path / "truth.csv", _lines())
+    (tmp_path / "empty.csv").write_text("track_id,frame,x,y\n")
+    assert main(["evaluate", str(tmp_path / "empty.csv"), "--truth", str(tmp_path / "truth.csv"), "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "evaluation.json").read_text())
+    assert (report["track_error"], report["mota"], report["idf1"], report["misses"], report["motp_px"]) == (1.0, 0.0, 0.0, 18, None)
+    assert len((tmp_path / "out" / "wrong_tracks.csv").read_text().splitlines()) == 4

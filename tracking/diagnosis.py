@@ -64,7 +64,9 @@ def _follower_state(result: Tracks, truth: Tracks, matched: np.ndarray, follower
 def _columns(records: list[tuple], result: Tracks, truth: Tracks) -> dict[str, np.ndarray]:
     def ids(tracks: Tracks, rows) -> np.ndarray:
         rows = np.asarray(rows, dtype=np.int64)
-        return np.where(rows == UNMATCHED, -1, tracks.track_ids[np.maximum(rows, 0)]).astype(np.int64)
+        found = np.full(rows.size, -1, dtype=np.int64)
+        found[rows != UNMATCHED] = tracks.track_ids[rows[rows != UNMATCHED]]
+        return found
 
     track, column, follower, taker, jumped, what = (list(values) for values in zip(*records)) if records else ([],) * 6
     return {
