@@ -27,7 +27,7 @@ from tracking.tracks import Tracks
 from .errors import DataError
 from .formats import isbi, mot, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
-from .formats.xmltree import parse_xml
+from .formats.xmltree import root_tag
 
 FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi}
 _WRITE_DEFAULTS = {".csv": "csv", ".txt": "mot", ".xml": "trackmate"}
@@ -121,10 +121,10 @@ def _sniff(path: Path) -> str:
     if suffix == ".txt":
         return "mot"
     if suffix == ".xml":
-        root = parse_xml(path)
-        if root.tag == "TrackMate":
+        tag, line = root_tag(path)
+        if tag == "TrackMate":
             return "trackmate"
-        if root.tag == "root":
+        if tag == "root":
             return "isbi"
-        raise DataError(path, f"line {root.line}: XML root <{root.tag}> is neither TrackMate (<TrackMate>) nor ISBI (<root>)")
+        raise DataError(path, f"line {line}: XML root <{tag}> is neither TrackMate (<TrackMate>) nor ISBI (<root>)")
     raise DataError(path, f"cannot tell the track format from the extension {path.suffix!r}; {_known()}")

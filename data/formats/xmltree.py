@@ -69,6 +69,32 @@ def parse_xml(path) -> Element:
     return roots[0]
 
 
+def root_tag(path) -> tuple[str, int]:
+    """The root element's tag and line, reading only as far as its start tag.
+
+    Raises
+    ------
+    DataError
+        If the file is missing, or is malformed or ends before the root element.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(path, "no such file")
+    parser = expat.ParserCreate()
+    found: list[tuple[str, int]] = []
+    parser.StartElementHandler = lambda tag, attrib: found.append((tag, parser.CurrentLineNumber)) if not found else None
+    try:
+        with open(path, "rb") as handle:
+            while not found:
+                chunk = handle.read(1 << 16)
+                parser.Parse(chunk, not chunk)
+                if not chunk:
+                    break
+    except expat.ExpatError as error:
+        raise DataError(path, f"line {error.lineno}, column {error.offset + 1}: malformed XML ({expat.ErrorString(error.code)})") from None
+    return found[0]
+
+
 def number(path, element: Element, name: str, whole: bool = False) -> float:
     """Attribute ``name`` of ``element`` as a number.
 
