@@ -144,7 +144,7 @@ class _Exchange:
         return old[:, None] + old[None, :] - new - new.T
 
     def refresh(self, k: int) -> None:
-        if not 1 <= k < self.n_frames:
+        if not 1 <= k < self.n_frames or self.xy.shape[0] < 2:
             return
         gain = np.triu(self.cut_gains(k), 1)
         flat = int(np.argmax(gain))
