@@ -1,0 +1,117 @@
+"""Join a track that ends to a track that starts a few frames later when they are one object.
+
+IPAN's post-processing idea, in GOA's terms: the end of track A (its last measured point and
+velocity) is joined to the start of track B (first point and velocity) across ``gap`` missed
+frames when both moves through the bridge, from A's velocity to the bridging velocity and from
+it to B's, pass the individual motion model within phi_max. A join costs the two links' costs
+plus phi_max for every missed frame (the cost of a slave), so short, smooth bridges win; the
+joins are chosen together by one optimal assignment of ends to starts.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .assignment import UNASSIGNED, solve_split
+from .goa import GOAConfig
+from .motion import Candidates
+
+
+def _ends(frames: Sequence[np.ndarray], assignment: np.ndarray, reverse: bool) -> tuple[np.ndarray, ...]:
+    """Per track: frame, position and velocity (pixels/frame, pointing forwards in time) of its
+    last measured point, or of its first when ``reverse``; NaN velocity for one-point tracks."""
+    n_tracks, n = assignment.shape
+    held = assignment != UNASSIGNED
+    frame = np.arange(n)
+    if reverse:
+        outer = np.where(held, frame, n).min(axis=1)
+        inner = np.where(held & (frame > outer[:, None]), frame, n).min(axis=1)
+    else:
+        outer = np.where(held, frame, -1).max(axis=1)
+        inner = np.where(held & (frame < outer[:, None]), frame, -1).max(axis=1)
+    everything = np.concatenate([np.asarray(f, dtype=float).reshape(-1, 2) for f in frames] + [np.full((1, 2), np.nan)])
+    offset = np.concatenate(([0], np.cumsum([len(f) for f in frames])))
+    xy = []
+    for column in (outer, inner):
+        ok = (column >= 0) & (column < n)
+        at = np.where(ok, column, 0)
+        xy.append(everything[np.where(ok, offset[at] + assignment[np.arange(n_tracks), at], -1)])
+    velocity = (xy[0] - xy[1]) / (outer - inner)[:, None]
+    return outer, xy[0], -velocity if reverse else velocity
+
+
+def close_gaps(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:
+    """Join track ends to later track starts across at most ``max_gap`` missed frames.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions per frame, pixels.
+    assignment : ndarray of int, shape (n_tracks, n_frames)
+        Measurement index per track and frame, -1 where none.
+    config : GOAConfig
+        The motion model, phi_max and the speed limits.
+    max_gap : int
+        Longest bridge, in missed frames (0 joins only a track that ends right before another starts).
+
+    Returns
+    -------
+    ndarray of int, shape (n_joined, n_frames)
+        The joined tracks, each in the row of its earliest part; the bridged frames hold -1.
+    """
+    n_tracks, n = assignment.shape
+    if n_tracks < 2:
+        return assignment
+    last, end_xy, end_velocity = _ends(frames, assignment, reverse=False)
+    first, start_xy, start_velocity = _ends(frames, assignment, reverse=True)
+    usable = ~np.isnan(end_velocity[:, 0]) & ~np.isnan(start_velocity[:, 0])
+    order = np.flatnonzero(usable)[np.argsort(first[usable], kind="stable")]
+    # Starts of each end's candidates are contiguous in ``order``: first frames last+1..last+1+max_gap.
+    ends = np.flatnonzero(usable)
+    low = np.searchsorted(first[order], last[ends] + 1, side="left")
+    high = np.searchsorted(first[order], last[ends] + 2 + max_gap, side="left")
+    count = high - low
+    end = np.repeat(ends, count)
+    start = order[np.repeat(low, count) + np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)]
+    gap = first[start] - last[end]  # frames the bridge spans, missed frames + 1
+
+    bridge = Candidates(end, start, start_xy[start] - end_xy[end], gap, end_velocity[end])
+    speed = np.hypot(*bridge.velocity.T)
+    scale = config.d_max if config.d_max is not None else max(float(speed.max(initial=0.0)), 1.0)
+    leaving = Candidates(end, start, start_velocity[start], np.ones_like(gap), bridge.velocity)
+    into = config.individual.cost(bridge, config.phi_max, scale)
+    out = config.individual.cost(leaving, config.phi_max, scale)
+    valid = (into <= config.phi_max) & (out <= config.phi_max) & (speed >= config.d_min)
+    if config.d_max is not None:
+        valid &= speed <= config.d_max
+    end, start, gap = end[valid], start[valid], gap[valid]
+    weight = into[valid] + out[valid] + (gap - 1) * config.phi_max
+    # Leaving an end and a start apart costs more than any valid join, so every join that does
+    # not compete with a better one is made.
+    unmatched = (2 + max_gap) * config.phi_max / 2
+    successor = solve_split(n_tracks, n_tracks, end, start, weight, unmatched)
+    return _chain(assignment, successor)
+
+
+def _chain(assignment: np.ndarray, successor: np.ndarray) -> np.ndarray:
+    """Merge each track with its successor's chain into the row of the chain's first track."""
+    n_tracks = assignment.shape[0]
+    predecessor = np.full(n_tracks, UNASSIGNED, dtype=np.int64)
+    joined = successor != UNASSIGNED
+    predecessor[successor[joined]] = np.flatnonzero(joined)
+    root = np.arange(n_tracks)
+    while True:
+        up = predecessor[root]
+        if (up == UNASSIGNED).all():
+            break
+        root = np.where(up != UNASSIGNED, up, root)
+    roots, row = np.unique(root, return_inverse=True)
+    merged = np.full((roots.size, assignment.shape[1]), UNASSIGNED, dtype=np.int64)
+    # Parts of a chain never share a frame, and -1 is below every index.
+    np.maximum.at(merged, row, assignment)
+    return merged
+
+
+__all__ = ["close_gaps"]

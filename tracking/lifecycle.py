@@ -1,0 +1,254 @@
+"""GOA-updown for points that come and go: track initiation, termination and gap closing.
+
+GOA as published keeps the heads it starts with. Its discussion proposes the open variant
+implemented here: at every frame step GOA first extends the established tracks (one optimal
+assignment with slaves and false tracks, :func:`tracking.goa.assign_step`), then the
+measurements that no track took are linked into new tracks. A new track opens only when its
+first measurements chain smoothly over ``GOAConfig.lookahead`` frames in a row (scored like the
+first links of GOA-updown, then confirmed by GOA itself on the leftover measurements), so that a
+false detection does not open a track. A track ends when it has taken more than ``max_gap``
+slaves in a row; its trailing slaves are dropped and its inner gaps are interpolated.
+
+The up pass runs forwards; the down pass runs backwards in time from the tracks the up pass
+holds at the last frame, so that every track start is re-decided with the velocities learned
+later, as in GOA-updown. Gap closing (:mod:`tracking.gap_closing`) then joins a track end to a
+later track start when the motion model says they are one object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from .assignment import UNASSIGNED
+from .gap_closing import close_gaps
+from .goa import GOAConfig, Progress, _HeadState, assign_step, goa_pass, initial_links
+from .tracks import Tracks, tracks_from_assignment
+
+# Frames a track must hold in a row to open near the end of a pass, where fewer than
+# ``lookahead`` frames remain: one triplet, the least that shows smooth motion.
+_SHORTEST_CONFIRMATION = 3
+
+
+@dataclass(frozen=True)
+class LifecycleConfig:
+    """When tracks open, end and are joined again.
+
+    Attributes
+    ----------
+    max_gap : int
+        Longest run of missed frames (consecutive slaves) a track survives, frames; gaps up to
+        this length are filled by interpolation, and gap closing joins a track end to a track
+        start at most this many frames later.
+    close_gaps : bool
+        Join track ends to later starts after the passes (see :mod:`tracking.gap_closing`).
+    """
+
+    max_gap: int = 10
+    close_gaps: bool = True
+    pass_gap: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.max_gap, (int, np.integer)) and self.max_gap >= 0):
+            raise ValueError(f"max_gap must be a whole number of frames >= 0, got {self.max_gap}")
+
+
+class _Heads:
+    """Every head of one pass: its state, whether it still runs, and what it holds per frame."""
+
+    def __init__(self, n_frames: int):
+        self.assignment = np.empty((0, n_frames), dtype=np.int64)
+        self.state = _HeadState(np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)))
+        self.slaves = np.empty(0, np.int64)  # consecutive slaves up to the latest step
+        self.running = np.empty(0, bool)
+
+    def add(self, frames: Sequence[np.ndarray], rows: np.ndarray, start: int, until: int) -> None:
+        """Add heads whose measurements of steps ``start..until`` are given in ``rows`` (H, n)."""
+        span = until - start + 1
+        state = _HeadState.from_history(frames[start : until + 1], rows[:, start : until + 1], span)
+        last_step = np.where(state.last_step >= 0, state.last_step + start, -1)
+        self.assignment = np.concatenate((self.assignment, rows))
+        self.state = _HeadState(
+            np.concatenate((self.state.last_xy, state.last_xy)),
+            np.concatenate((self.state.last_step, last_step)),
+            np.concatenate((self.state.velocity, state.velocity)),
+        )
+        self.slaves = np.concatenate((self.slaves, until - last_step))
+        self.running = np.concatenate((self.running, np.ones(rows.shape[0], bool)))
+
+    def extend(self, step: int, points: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:
+        """Assign the running heads to the frame at ``step``; returns the measurements taken."""
+        running = np.flatnonzero(self.running)
+        state = _HeadState(self.state.last_xy[running], self.state.last_step[running], self.state.velocity[running])
+        taken = assign_step(state, step, points, config)
+        state.advance(step, taken, points)
+        self.state.last_xy[running], self.state.last_step[running] = state.last_xy, state.last_step
+        self.state.velocity[running] = state.velocity
+        self.assignment[running, step] = taken
+        missed = taken == UNASSIGNED
+        self.slaves[running] = np.where(missed, self.slaves[running] + 1, 0)
+        self.running[running[missed & (self.slaves[running] > max_gap)]] = False
+        return taken[~missed]
+
+
+def _births(frames: Sequence[np.ndarray], free: list[np.ndarray], start: int, end: int, config: GOAConfig) -> np.ndarray:
+    """New tracks among the free measurements of frames ``start`` to ``end`` (inclusive).
+
+    The first links are chosen as GOA-updown chooses them (each scored by the smoothest path it
+    starts), then GOA runs on the free measurements alone; a candidate that needs a slave before
+    ``end`` is not confirmed.
+
+    Returns
+    -------
+    ndarray of int, shape (B, len(frames))
+        Each confirmed track's measurement index per frame, -1 outside ``start..end``.
+    """
+    index = [np.flatnonzero(free[k]) for k in range(start, end + 1)]
+    window = [frames[k][i] for k, i in zip(range(start, end + 1), index)]
+    if window[0].shape[0] == 0:
+        return np.empty((0, len(frames)), np.int64)
+    if len(window) == 1:
+        local = np.arange(window[0].shape[0])[:, None]
+    else:
+        first = initial_links(window, config)
+        local = goa_pass(window, first[first[:, 1] != UNASSIGNED], config)
+        local = local[(local != UNASSIGNED).all(axis=1)]
+    rows = np.full((local.shape[0], len(frames)), UNASSIGNED, dtype=np.int64)
+    for column, k in enumerate(range(start, end + 1)):
+        rows[:, k] = index[column][local[:, column]]
+    return rows
+
+
+def open_pass(
+    frames: Sequence[np.ndarray],
+    initial: np.ndarray,
+    config: GOAConfig,
+    max_gap: int,
+    progress: Progress | None = None,
+) -> np.ndarray:
+    """One GOA pass in the order given, with track initiation and termination.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions per frame, pixels, in processing order.
+    initial : ndarray of int, shape (m, 2)
+        Tracks known from the start: measurement index in ``frames[0]`` and ``frames[1]``
+        (-1 for a slave); each must hold a measurement in ``frames[0]``.
+    config : GOAConfig
+    max_gap : int
+        Consecutive slaves after which a track ends.
+    progress : callable, optional
+        Called with 1 after each frame step.
+
+    Returns
+    -------
+    ndarray of int, shape (n_tracks, len(frames))
+        Measurement index per track and frame, -1 where it holds none. Given tracks come
+        first, in their order, then new tracks in the order they opened.
+    """
+    n = len(frames)
+    heads = _Heads(n)
+    free = [np.ones(f.shape[0], bool) for f in frames]
+    window = config.lookahead
+    shortest = min(_SHORTEST_CONFIRMATION, n)
+    if initial.shape[0]:
+        rows = np.full((initial.shape[0], n), UNASSIGNED, dtype=np.int64)
+        rows[:, : initial.shape[1]] = initial
+        heads.add(frames, rows, 0, initial.shape[1] - 1)
+        for k in range(initial.shape[1]):
+            free[k][initial[initial[:, k] != UNASSIGNED, k]] = False
+    first_step = initial.shape[1] if initial.shape[0] else 1
+    for step in range(1, n):
+        if step >= first_step:
+            free[step][heads.extend(step, frames[step], config, max_gap)] = False
+        start = step - window + 1
+        if start >= 0:
+            _open(heads, frames, free, start, step, config)
+        if progress is not None:
+            progress(1)
+    # Near the end, fewer frames remain than the window: confirm over what is left.
+    for start in range(max(n - window + 1, 0), n - shortest + 1):
+        _open(heads, frames, free, start, n - 1, config)
+    return heads.assignment
+
+
+def _open(heads: _Heads, frames: Sequence[np.ndarray], free: list[np.ndarray], start: int, end: int, config: GOAConfig) -> None:
+    rows = _births(frames, free, start, end, config)
+    if rows.shape[0]:
+        heads.add(frames, rows, start, end)
+        for k in range(start, end + 1):
+            free[k][rows[:, k]] = False
+
+
+def goa_updown_open(
+    frames: Sequence[np.ndarray],
+    config: GOAConfig = GOAConfig(),
+    lifecycle: LifecycleConfig = LifecycleConfig(),
+    first_frame: int = 0,
+    progress: Progress | None = None,
+) -> Tracks:
+    """GOA-updown whose tracks open and end anywhere, followed by gap closing.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions per frame (x, y), pixels.
+    config : GOAConfig
+        Per-step assignment; ``lookahead`` is also the number of frames in a row that a new
+        track must be measured in to open (fewer at the ends of the clip, but at least 3).
+    lifecycle : LifecycleConfig
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    progress : callable, optional
+        Called with 1 after each frame step of either pass (``pass_steps(n_frames)`` calls).
+
+    Returns
+    -------
+    Tracks
+        Ordered by first frame, then by measurement index in it; inner gaps interpolated,
+        no trailing slaves. Measurements on no track (false detections) are left out.
+    """
+    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    n = len(frames)
+    pg = lifecycle.max_gap if lifecycle.pass_gap is None else lifecycle.pass_gap
+    up = open_pass(frames, np.empty((0, 2), np.int64), config, pg, progress)
+    backwards = frames[::-1]
+    last = up[:, ::-1][:, :2]
+    down = open_pass(backwards, last[last[:, 0] != UNASSIGNED] if n >= 2 else last[:0], config, pg, progress)
+    assignment = down[:, ::-1]
+    if lifecycle.close_gaps:
+        assignment = close_gaps(frames, assignment, config, lifecycle.max_gap)
+    return tracks_from_assignment(frames, _in_order(assignment), first_frame)
+
+
+def _in_order(assignment: np.ndarray) -> np.ndarray:
+    """Rows sorted by first measured frame, then by the measurement index there."""
+    if assignment.shape[0] == 0:
+        return assignment
+    held = assignment != UNASSIGNED
+    first = held.argmax(axis=1)
+    first_index = assignment[np.arange(assignment.shape[0]), first]
+    return assignment[np.lexsort((first_index, first))]
+
+
+def drop_short(tracks: Tracks, min_length: int) -> Tracks:
+    """The tracks that span at least ``min_length`` frames (first to last position, gaps included).
+
+    Parameters
+    ----------
+    tracks : Tracks
+    min_length : int
+        Frames; 0 or 1 keeps every track.
+    """
+    present = tracks.present
+    frame = np.arange(tracks.n_frames)
+    first = np.where(present, frame, tracks.n_frames).min(axis=1)
+    last = np.where(present, frame, -1).max(axis=1)
+    keep = last - first + 1 >= min_length
+    return Tracks(tracks.xy[keep], tracks.measurement[keep], tracks.first_frame, tracks.track_ids[keep])
+
+
+__all__ = ["LifecycleConfig", "goa_updown_open", "open_pass", "drop_short"]
