@@ -113,6 +113,10 @@ def first_links(
         ok = (triplet_cost <= phi_max) & (next_speed >= d_min)
         if d_max is not None:
             ok &= next_speed <= d_max
+        # Keep each incoming link's ``neighbours`` smoothest continuations: without a cap the
+        # links multiply with every step where points are dense (a hundred million triplets
+        # on 500 beads a frame), and a path through a rougher triplet does not win anyway.
+        ok &= _cheapest_per_group(link_in, np.where(ok, triplet_cost, np.inf), neighbours)
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
         out_links, link_out = np.unique(np.column_stack((middle_index, point_out)), axis=0, return_inverse=True)
         links.append((out_links[:, 0], out_links[:, 1]))
@@ -140,6 +144,18 @@ def _first_candidates(
     _, index = cKDTree(second).query(first, k=k)
     index = np.asarray(index).reshape(first.shape[0], k)
     return np.repeat(np.arange(first.shape[0]), k), index.ravel()
+
+
+def _cheapest_per_group(group: np.ndarray, cost: np.ndarray, count: int) -> np.ndarray:
+    """Boolean mask of the ``count`` cheapest items of each group (ties by position)."""
+    order = np.lexsort((np.arange(group.size), cost, group))
+    sorted_group = group[order]
+    starts = np.flatnonzero(np.r_[True, sorted_group[1:] != sorted_group[:-1]]) if group.size else np.empty(0, np.int64)
+    sizes = np.diff(np.r_[starts, group.size])
+    rank = np.arange(group.size) - np.repeat(starts, sizes)
+    kept = np.zeros(group.size, bool)
+    kept[order[rank < count]] = True
+    return kept
 
 
 def _extent(points: np.ndarray) -> float:
