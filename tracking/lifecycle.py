@@ -25,6 +25,8 @@ import numpy as np
 from .assignment import UNASSIGNED
 from .gap_closing import close_gaps
 from .goa import GOAConfig, Progress, _HeadState, assign_step, goa_pass, initial_links
+from .initialisation import _extent, pairs_within
+from .motion import Candidates
 from .tracks import Tracks, tracks_from_assignment
 
 # Frames a track must hold in a row to open near the end of a pass, where fewer than
@@ -78,11 +80,22 @@ class _Heads:
         self.slaves = np.concatenate((self.slaves, until - last_step))
         self.running = np.concatenate((self.running, np.ones(rows.shape[0], bool)))
 
-    def extend(self, step: int, points: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:
-        """Assign the running heads to the frame at ``step``; returns the measurements taken."""
+    def extend(self, step: int, points: np.ndarray, after: np.ndarray | None, config: GOAConfig, max_gap: int) -> np.ndarray:
+        """Assign the running heads to the frame at ``step``; returns the measurements taken.
+
+        ``after`` holds the measurements of the next frame (None at the last): a head that
+        comes back from slaves keeps its measurement only if the motion continues smoothly
+        into it, since a point that enters the view near where a track was lost can fit the
+        gap-normalised step as well as the lost point would.
+        """
         running = np.flatnonzero(self.running)
         state = _HeadState(self.state.last_xy[running], self.state.last_step[running], self.state.velocity[running])
         taken = assign_step(state, step, points, config)
+        back = (taken != UNASSIGNED) & (step - state.last_step > 1)
+        if after is not None and back.any():
+            gap = step - state.last_step[back]
+            bridge = (points[taken[back]] - state.last_xy[back]) / gap[:, None]
+            taken[np.flatnonzero(back)[~_continues(points[taken[back]], bridge, after, config)]] = UNASSIGNED
         state.advance(step, taken, points)
         self.state.last_xy[running], self.state.last_step[running] = state.last_xy, state.last_step
         self.state.velocity[running] = state.velocity
@@ -91,6 +104,25 @@ class _Heads:
         self.slaves[running] = np.where(missed, self.slaves[running] + 1, 0)
         self.running[running[missed & (self.slaves[running] > max_gap)]] = False
         return taken[~missed]
+
+
+def _continues(origin: np.ndarray, velocity: np.ndarray, after: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """Boolean per origin: some measurement of the next frame continues ``velocity`` within phi_max."""
+    speed = np.hypot(*velocity.T)
+    radius = config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max)
+    if config.d_max is not None:
+        radius = np.minimum(radius, config.d_max)
+    radius = np.where(np.isfinite(radius), radius, _extent(after))
+    owner, target = pairs_within(origin, radius, after)
+    pairs = Candidates(owner, target, after[target] - origin[owner], np.ones(owner.size, np.int64), velocity[owner])
+    speed_out = np.hypot(*pairs.velocity.T)
+    scale = config.d_max if config.d_max is not None else max(float(speed_out.max(initial=0.0)), 1.0)
+    ok = (config.individual.cost(pairs, config.phi_max, scale) <= config.phi_max) & (speed_out >= config.d_min)
+    if config.d_max is not None:
+        ok &= speed_out <= config.d_max
+    found = np.zeros(origin.shape[0], bool)
+    found[owner[ok]] = True
+    return found
 
 
 def _births(frames: Sequence[np.ndarray], free: list[np.ndarray], start: int, end: int, config: GOAConfig) -> np.ndarray:
@@ -163,7 +195,8 @@ def open_pass(
     first_step = initial.shape[1] if initial.shape[0] else 1
     for step in range(1, n):
         if step >= first_step:
-            free[step][heads.extend(step, frames[step], config, max_gap)] = False
+            after = frames[step + 1] if step + 1 < n else None
+            free[step][heads.extend(step, frames[step], after, config, max_gap)] = False
         start = step - window + 1
         if start >= 0:
             _open(heads, frames, free, start, step, config)
