@@ -5,7 +5,7 @@ uniform position with a uniform direction and a normally distributed speed; from
 frame its speed and direction take small Gaussian steps, and the speed is kept within
 [0, max_speed]. Only trajectories that stay inside the square view for the whole sequence are
 kept (data "without entry/exit"), so every trajectory spans every frame. A point may be
-occluded (not measured) for single frames. Positions are pixels, x right, y down; frames are
+occluded (not measured) for single frames, away from the sequence's ends. Positions are pixels, x right, y down; frames are
 0-based. Measurements are shuffled within each frame so that no tracker can use their order.
 """
 
@@ -22,6 +22,9 @@ from tracking.tracks import NO_MEASUREMENT, Tracks
 # almost always fit, fast ones in a small view need more.
 _BATCH_FACTOR = 4
 _MAX_ATTEMPTS = 200
+# Frames at each end of the sequence without occlusion: every trajectory then begins and ends
+# with two measured points, the least from which any tracker can know its velocity.
+_CLEAR_ENDS = 2
 
 
 @dataclass(frozen=True)
@@ -47,8 +50,8 @@ class PSMGSpec:
     max_speed : float or None
         Largest speed, pixels/frame; None for twice the mean speed.
     occlusion : float
-        Probability that a point is not measured in a frame (never in the first or last frame,
-        never two frames in a row).
+        Probability that a point is not measured in a frame (never in the first two or the last
+        two frames, never two frames in a row).
     random_seed : int
         Seed of every random choice: same spec, same data.
     """
@@ -145,10 +148,10 @@ def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int) -> np.nd
 
 
 def _occlusions(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(trajectories, frames) bool: single-frame occlusions away from the first and last frame."""
+    """(trajectories, frames) bool: single-frame occlusions away from the first and last two frames."""
     hidden = rng.random((spec.trajectories, spec.frames)) < spec.occlusion
-    hidden[:, 0] = False
-    hidden[:, -1] = False
+    hidden[:, :_CLEAR_ENDS] = False
+    hidden[:, spec.frames - _CLEAR_ENDS :] = False
     for k in range(1, spec.frames):
         hidden[:, k] &= ~hidden[:, k - 1]
     return hidden

@@ -177,8 +177,8 @@ def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig)
     """Grid of next positions from ``origin`` (N, 2) moving on from ``velocity`` (N, 2).
 
     Directions within arccos(1 - delta_max) of the velocity's, in steps of ``angle_step``;
-    speeds within the delta_max limits of its speed, capped at v_max, in steps of
-    ``speed_step``. Returns shape (N, G, 2).
+    speeds from the lowest that the delta_max limits allow up to the highest (capped at
+    v_max), in steps of ``speed_step``. Returns shape (N, G, 2), NaN-padded.
     """
     half = math.degrees(math.acos(1.0 - config.delta_max))
     turns = np.radians(np.arange(-math.floor(half / config.angle_step), math.floor(half / config.angle_step) + 1)
@@ -188,9 +188,11 @@ def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig)
     grids = []
     for s in speed:
         low, high = _speed_bounds(float(s), config.delta_max, config.v_max)
-        steps = np.arange(math.ceil(low / config.speed_step), math.floor(high / config.speed_step) + 1)
-        grids.append(steps * config.speed_step)
+        # From the slowest allowed speed up, so that slow points have candidates too.
+        grids.append(low + config.speed_step * np.arange(max(math.floor((high - low) / config.speed_step) + 1, 0)))
     size = max((g.size for g in grids), default=0)
+    if size == 0:
+        return np.empty((origin.shape[0], 0, 2))
     speeds = np.full((len(grids), size), np.nan)
     for row, grid in enumerate(grids):
         speeds[row, : grid.size] = grid
