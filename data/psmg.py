@@ -23,8 +23,9 @@ from tracking.tracks import NO_MEASUREMENT, Tracks
 _BATCH_FACTOR = 4
 _MAX_ATTEMPTS = 200
 # Frames at each end of the sequence without occlusion: every trajectory then begins and ends
-# with two measured points, the least from which any tracker can know its velocity.
-_CLEAR_ENDS = 2
+# with three measured points, the least that a triplet-based tracker (IPAN) needs to start or
+# end a trajectory. The sources do not say where their generator put occlusions.
+_CLEAR_ENDS = 3
 
 
 @dataclass(frozen=True)
@@ -50,8 +51,8 @@ class PSMGSpec:
     max_speed : float or None
         Largest speed, pixels/frame; None for twice the mean speed.
     occlusion : float
-        Probability that a point is not measured in a frame (never in the first two or the last
-        two frames, never two frames in a row).
+        Probability that a point is not measured in a frame (never in the first three or the last
+        three frames, never two frames in a row).
     random_seed : int
         Seed of every random choice: same spec, same data.
     """
@@ -148,7 +149,7 @@ def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int) -> np.nd
 
 
 def _occlusions(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(trajectories, frames) bool: single-frame occlusions away from the first and last two frames."""
+    """(trajectories, frames) bool: single-frame occlusions away from the first and last three frames."""
     hidden = rng.random((spec.trajectories, spec.frames)) < spec.occlusion
     hidden[:, :_CLEAR_ENDS] = False
     hidden[:, spec.frames - _CLEAR_ENDS :] = False
