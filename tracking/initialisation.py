@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 from .motion import IndividualModel, smooth_motion_cost
 
 
-def _pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All (origin, point) index pairs with the point within the origin's radius."""
     if origins.shape[0] == 0 or points.shape[0] == 0:
         return np.empty(0, np.int64), np.empty(0, np.int64)
@@ -98,7 +98,7 @@ def first_links(
         widest = np.zeros(unique_middle.size)
         np.maximum.at(widest, inverse, radius)
         widest = np.where(np.isfinite(widest), widest, _extent(frames[step + 1]))
-        owner, nxt = _pairs_within(frames[step][unique_middle], widest, frames[step + 1])
+        owner, nxt = pairs_within(frames[step][unique_middle], widest, frames[step + 1])
         # Expand to (incoming link, next point) for every incoming link through that middle.
         order = np.argsort(inverse, kind="stable")
         per_middle = np.bincount(inverse, minlength=unique_middle.size)
@@ -133,7 +133,7 @@ def _first_candidates(
     first: np.ndarray, second: np.ndarray, d_max: float | None, neighbours: int
 ) -> tuple[np.ndarray, np.ndarray]:
     if d_max is not None:
-        return _pairs_within(first, np.full(first.shape[0], d_max), second)
+        return pairs_within(first, np.full(first.shape[0], d_max), second)
     k = min(neighbours, second.shape[0])
     if k == 0 or first.shape[0] == 0:
         return np.empty(0, np.int64), np.empty(0, np.int64)

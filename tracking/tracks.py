@@ -160,3 +160,55 @@ def _interpolate_inner_gaps(xy: np.ndarray) -> None:
     start, end = before[track, column], after[track, column]
     fraction = (column - start) / (end - start)
     xy[track, column] = xy[track, start] + fraction[:, None] * (xy[track, end] - xy[track, start])
+
+
+def tracks_from_links(
+    frames: list[np.ndarray],
+    links: np.ndarray,
+    first_frame: int = 0,
+) -> Tracks:
+    """Chain links between measurements into tracks, interpolating the frames a link skips.
+
+    Trackers that start and end tracks anywhere (nearest neighbour, SS, IPAN) report which
+    measurement follows which; every measurement without a predecessor starts a track and
+    every measurement, linked or not, belongs to exactly one track.
+
+    Parameters
+    ----------
+    frames : list of ndarray, each of shape (M_k, 2)
+        Measurement positions per frame, pixels.
+    links : ndarray of int, shape (L, 4)
+        Rows (frame, index, later_frame, later_index) in positions of ``frames``; a link may
+        skip frames (a closed gap), which are then filled by straight-line interpolation. Each
+        measurement has at most one successor and one predecessor.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+
+    Returns
+    -------
+    Tracks
+        Tracks ordered by their first frame, then by the index of their first measurement.
+    """
+    counts = np.array([f.shape[0] for f in frames], dtype=np.int64)
+    offset = np.concatenate(([0], np.cumsum(counts)))
+    total = int(offset[-1])
+    frame_of = np.repeat(np.arange(len(frames)), counts)
+    index_of = np.arange(total) - offset[frame_of]
+    links = np.asarray(links, dtype=np.int64).reshape(-1, 4)
+    source = offset[links[:, 0]] + links[:, 1]
+    target = offset[links[:, 2]] + links[:, 3]
+    successor = np.full(total, -1, dtype=np.int64)
+    successor[source] = target
+    has_predecessor = np.zeros(total, bool)
+    has_predecessor[target] = True
+    if np.unique(source).size != source.size or np.unique(target).size != target.size:
+        raise ValueError("a measurement has two successors or two predecessors")
+
+    current = np.flatnonzero(~has_predecessor)  # global ids are already in (frame, index) order
+    assignment = np.full((current.size, len(frames)), NO_MEASUREMENT, dtype=np.int64)
+    row = np.arange(current.size)
+    while current.size:
+        assignment[row, frame_of[current]] = index_of[current]
+        more = successor[current] >= 0
+        row, current = row[more], successor[current[more]]
+    return tracks_from_assignment(frames, assignment, first_frame)
