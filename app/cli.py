@@ -12,10 +12,10 @@ from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import correct, demo, evaluate, experiment, review, run
+from .commands import correct, demo, evaluate, experiment, review, run, track
 from .errors import UsageError
 
-COMMANDS = (run, demo, evaluate, correct, review, experiment)
+COMMANDS = (run, demo, evaluate, correct, review, experiment, track)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
