@@ -91,7 +91,7 @@ def test_a_frame_number_without_points_is_bridged(tmp_path, algorithm):
     assert list(tracks["area"]) == ["5", "5", "", "5", "5", "6", "6", "", "6", "6"]
 
 
-def test_goa_options_are_refused_by_other_trackers(scene, tmp_path):
+def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):
     folder, _ = scene
     result = seedtrack("track", folder / "points.csv", "--out", tmp_path / "t.csv", "--algorithm", "nn", "--individual-model", "im3")
     assert result.returncode == 2
@@ -109,3 +109,80 @@ def test_model_options_reach_the_tracker(scene, tmp_path, model):
     labels = tracks["label"][tracks["interpolated"] == 0]
     assert len(set(labels)) == labels.size and set(labels) <= set(columns["label"])
     assert len(set(tracks["track_id"])) == (columns["frame"] == FIRST_FRAME).sum()
+
+
+def _one_line_exit_2(capsys, argv, message):
+    # In process for speed; test_track_goa_options_are_refused_by_other_trackers runs the real command.
+    assert main(list(map(str, argv))) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and message in error, error
+
+
+GOOD_POINTS = "frame,x,y\n0,1,1\n1,2,1\n"
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("frame,x\n0,1\n1,2\n", "points.csv: missing column(s) y"),
+        ("frame,x,y\n0,1,1\n1,abc,1\n", "points.csv: line 3: column x holds 'abc', not a number"),
+        ("frame,x,y\n0,1,1\n1,2,nan\n", "points.csv: line 3: column y holds 'nan', not a finite number"),
+        ("frame,x,y\n0,1,1\n1.5,2,1\n", "points.csv: line 3: column frame holds '1.5', not a whole number"),
+        ("frame,x,y\n0,1,1\n-1,2,1\n", "points.csv: line 3: frame -1 is negative"),
+        ("frame,x,y\n", "points.csv: no points (only a header)"),
+        ("", "points.csv: the file is empty"),
+        ("frame,x,y\n4,1,1\n4,2,1\n", "points.csv: all points are in frame 4; tracking needs points in at least two frames"),
+    ],
+)
+def test_track_bad_points_is_one_line_exit_2_nothing_written(tmp_path, capsys, text, message):
+    (tmp_path / "points.csv").write_text(text)
+    _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path / "tracks.csv"], message)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--max-speed", "0"], "--max-speed must be a positive finite number, got 0"),
+        (["--max-speed", "-3"], "--max-speed must be a positive finite number, got -3"),
+        (["--max-speed", "nan"], "--max-speed must be a positive finite number, got nan"),
+        (["--phi-max", "0"], "--phi-max must be a positive finite number, got 0"),
+        (["--min-speed", "-1"], "--min-speed must be a non-negative finite number, got -1"),
+        (["--min-speed", "5", "--max-speed", "3"], "d_min must be non-negative and below d_max"),
+        (["--algorithm", "ss", "--max-speed", "-1"], "--max-speed must be a positive finite number, got -1"),
+    ],
+)
+def test_track_bad_limits_are_one_line_exit_2_nothing_written(tmp_path, capsys, options, message):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS)
+    _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path / "tracks.csv", *options], message)
+    assert not (tmp_path / "tracks.csv").exists()
+
+
+TRUTH = "track_id,frame,x,y\n0,0,1,1\n0,1,2,1\n"
+
+
+@pytest.mark.parametrize(
+    "tracks, truth, message",
+    [
+        ("track_id,frame,x\n0,0,1\n", TRUTH, "tracks.csv: line 1: a track CSV needs columns track_id,frame,x,y"),
+        ("track_id,frame,x,y\n0,0,1,one\n", TRUTH, "tracks.csv: line 2: column y holds 'one', not a number"),
+        ("track_id,frame,x,y\n0,0,nan,1\n", TRUTH, "tracks.csv: line 2: column x holds 'nan', not a finite number"),
+        ("", TRUTH, "tracks.csv: line 1: a track CSV needs columns"),
+        (TRUTH, "track_id,frame,x,y\n", "truth.csv: holds no true tracks"),
+        (TRUTH, "track_id,frame,x,y\n0,3,1,1\n1,3,5,5\n", "truth.csv: holds a single frame (3)"),
+    ],
+)
+def test_evaluate_bad_files_are_one_line_exit_2_nothing_written(tmp_path, capsys, tracks, truth, message):
+    (tmp_path / "tracks.csv").write_text(tracks)
+    (tmp_path / "truth.csv").write_text(truth)
+    argv = ["evaluate", tmp_path / "tracks.csv", "--truth", tmp_path / "truth.csv", "--out", tmp_path / "out"]
+    _one_line_exit_2(capsys, argv, message)
+    assert not (tmp_path / "out").exists()
+
+
+def test_evaluate_scores_a_single_frame_result(tmp_path, capsys):
+    (tmp_path / "tracks.csv").write_text("track_id,frame,x,y\n5,0,1,1\n")
+    (tmp_path / "truth.csv").write_text(TRUTH)
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 0
+    table = capsys.readouterr().out
+    assert "track_error      1.000000" in table and "link_error       1.000000" in table
