@@ -8,9 +8,9 @@ kept (data "without entry/exit"), so every trajectory spans every frame. With ``
 the points are drawn in a larger square around the view instead, so that they cross its border:
 each stay in the view of at least 3 frames is one true trajectory (as in Primet's tpsmg), shorter
 stays are not measured. A point may be occluded (not measured) for up to ``max_occlusion``
-frames in a row, never in the first or last frame of its trajectory. Positions are pixels, x
-right, y down; frames are 0-based. Measurements are shuffled within each frame so that no
-tracker can use their order.
+frames in a row, never in the first or last three frames of its trajectory. Positions are
+pixels, x right, y down; frames are 0-based. Measurements are shuffled within each frame so
+that no tracker can use their order.
 """
 
 from __future__ import annotations
@@ -28,6 +28,10 @@ _BATCH_FACTOR = 4
 _MAX_ATTEMPTS = 200
 # Shortest stay in the view that counts as a trajectory with entry/exit, frames.
 _SHORTEST_STAY = 3
+# Frames at each end of a trajectory without occlusion: every trajectory then begins and ends
+# with three measured points, the least that a triplet-based tracker (IPAN) needs to start or
+# end a trajectory. The sources do not say where their generator put occlusions.
+_CLEAR_ENDS = 3
 
 
 @dataclass(frozen=True)
@@ -54,11 +58,11 @@ class PSMGSpec:
     max_speed : float or None
         Largest speed, pixels/frame; None for twice the mean speed.
     occlusion : float
-        Probability that an occlusion starts in a frame (never in the first or last frame of a
-        trajectory, never right after another occlusion).
+        Probability that an occlusion starts in a frame (never in the first three or the last
+        three frames of a trajectory, never right after another occlusion).
     max_occlusion : int
         Longest occlusion, frames; each lasts a uniformly drawn 1..max_occlusion frames, cut
-        short before the trajectory's last frame.
+        short before the trajectory's last three frames.
     entry_exit : bool
         Points enter and leave the view (see above).
     random_seed : int
@@ -192,17 +196,18 @@ def _occlusions(rng: np.random.Generator, spec: PSMGSpec, spans: np.ndarray) -> 
     """(trajectories, frames) bool: occlusions inside each trajectory's span, apart from each other.
 
     ``spans`` (trajectories, frames) marks the frames each trajectory is in the view; its runs
-    are contiguous. An occlusion may start where the frame before is visible and ends before
-    the span's last frame.
+    are contiguous. An occlusion may start where the frame before is visible, and neither it nor
+    any of its frames lies in the first or last three frames of the span.
     """
     starts = rng.random(spans.shape) < spec.occlusion
     length = rng.integers(1, spec.max_occlusion + 1, size=spans.shape) if spec.max_occlusion > 1 else np.ones(spans.shape, np.int64)
     frame = np.arange(spec.frames)
-    span_last = np.where(spans, frame, -1).max(axis=1)
+    span_first = np.where(spans, frame, spec.frames).min(axis=1)
+    latest = np.where(spans, frame, -1).max(axis=1) - _CLEAR_ENDS  # last frame an occlusion may cover
     hidden = np.zeros(spans.shape, bool)
     last_hidden = np.full(spans.shape[0], -2)
     for k in range(1, spec.frames):
-        begin = starts[:, k] & spans[:, k - 1] & (last_hidden < k - 1)
-        last_hidden = np.where(begin, np.minimum(k + length[:, k] - 1, span_last - 1), last_hidden)
+        begin = starts[:, k] & (k >= span_first + _CLEAR_ENDS) & (k <= latest) & (last_hidden < k - 1)
+        last_hidden = np.where(begin, np.minimum(k + length[:, k] - 1, latest), last_hidden)
         hidden[:, k] = last_hidden >= k
     return hidden

@@ -76,9 +76,10 @@ def detect_blobs(image: np.ndarray, options: BlobOptions = BlobOptions()) -> dic
         mean grey level (0-255) of the blob. Sorted by y, then x. Empty arrays when the
         frame holds no blob.
     """
-    gray = to_gray(image).astype(np.float32)
+    gray = to_gray(image)
     # Work on "objectness": how far each pixel is on the object side of the background.
-    signal = 255.0 - gray if options.polarity == "dark" else gray
+    # Kept in uint8 (exact, since 255 - gray is integral) so whole-frame passes stay cheap.
+    signal = cv2.bitwise_not(gray) if options.polarity == "dark" else gray
     level = _threshold(signal, options.threshold, options.polarity)
     mask = (signal > level).astype(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
@@ -91,11 +92,10 @@ def detect_blobs(image: np.ndarray, options: BlobOptions = BlobOptions()) -> dic
     if count <= 1 or not keep.any():
         return {name: np.empty(0) for name in MEASUREMENT_COLUMNS}
     flat_labels = labels.ravel()
-    weight = (signal.ravel() - level).astype(np.float64)
-    inside = flat_labels > 0
-    rows, columns = np.divmod(np.flatnonzero(inside), gray.shape[1])
+    inside = np.flatnonzero(flat_labels)
+    rows, columns = np.divmod(inside, gray.shape[1])
     label = flat_labels[inside]
-    w = weight[inside]
+    w = signal.ravel()[inside] - level
     total = np.bincount(label, weights=w, minlength=count)[1:]
     x = np.bincount(label, weights=w * columns, minlength=count)[1:] / total
     y = np.bincount(label, weights=w * rows, minlength=count)[1:] / total
@@ -109,5 +109,5 @@ def _threshold(signal: np.ndarray, threshold: float | None, polarity: str) -> fl
     """Objectness level that separates objects; a grey-level threshold is converted."""
     if threshold is not None:
         return 255.0 - threshold if polarity == "dark" else float(threshold)
-    level, _ = cv2.threshold(signal.astype(np.uint8), 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    level, _ = cv2.threshold(signal, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     return float(level)

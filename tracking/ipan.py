@@ -97,7 +97,9 @@ class _Linker:
     def _near(self, tree: cKDTree | None, points: np.ndarray) -> list[np.ndarray]:
         if tree is None or points.shape[0] == 0:
             return [np.empty(0, np.int64) for _ in range(points.shape[0])]
-        return [np.asarray(sorted(f), dtype=np.int64) for f in tree.query_ball_point(points, self.config.v_max)]
+        # A point moving at exactly v_max must be found despite rounding.
+        radius = self.config.v_max * (1.0 + 1e-9)
+        return [np.asarray(sorted(f), dtype=np.int64) for f in tree.query_ball_point(points, radius)]
 
     def starts(self, k: int, p: int) -> np.ndarray:
         """Points of frame k - 1 that point p of frame k may follow: its fixed predecessor, or
@@ -177,8 +179,8 @@ def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig)
     """Grid of next positions from ``origin`` (N, 2) moving on from ``velocity`` (N, 2).
 
     Directions within arccos(1 - delta_max) of the velocity's, in steps of ``angle_step``;
-    speeds within the delta_max limits of its speed, capped at v_max, in steps of
-    ``speed_step``. Returns shape (N, G, 2).
+    speeds from the lowest that the delta_max limits allow up to the highest (capped at
+    v_max) in steps of ``speed_step``, the highest included. Returns shape (N, G, 2), NaN-padded.
     """
     half = math.degrees(math.acos(1.0 - config.delta_max))
     turns = np.radians(np.arange(-math.floor(half / config.angle_step), math.floor(half / config.angle_step) + 1)
@@ -188,9 +190,13 @@ def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig)
     grids = []
     for s in speed:
         low, high = _speed_bounds(float(s), config.delta_max, config.v_max)
-        steps = np.arange(math.ceil(low / config.speed_step), math.floor(high / config.speed_step) + 1)
-        grids.append(steps * config.speed_step)
+        # From the slowest allowed speed up to the fastest, both included, so that points near
+        # standstill or near v_max have candidates too.
+        steps = low + config.speed_step * np.arange(max(math.floor((high - low) / config.speed_step) + 1, 0))
+        grids.append(np.append(steps, high) if steps.size and high - steps[-1] > 1e-9 else steps)
     size = max((g.size for g in grids), default=0)
+    if size == 0:
+        return np.empty((origin.shape[0], 0, 2))
     speeds = np.full((len(grids), size), np.nan)
     for row, grid in enumerate(grids):
         speeds[row, : grid.size] = grid

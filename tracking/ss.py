@@ -126,30 +126,48 @@ class _Exchange:
             cost[real] = np.where(bad, _FORBIDDEN, deviation)
         return cost.reshape(shape)
 
-    def cut_gains(self, k: int) -> np.ndarray:
-        """Gain of swapping every two slots' remainders from frame k on, shape (slots, slots)."""
-        slots = self.xy.shape[0]
-        new = np.zeros((slots, slots))
+    def cut_slots(self, k: int) -> np.ndarray:
+        """Slots a swap at frame k can change: those with a real point in frames k-2 to k+1,
+        plus one all-phantom slot there (all such slots are alike, so one stands for them)."""
+        window = self.index[:, max(k - 2, 0) : k + 2]
+        active = (window >= 0).any(axis=1)
+        idle = np.flatnonzero(~active)
+        return np.concatenate((np.flatnonzero(active), idle[:1]))
+
+    def cut_cost(self, k: int, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+        """Cost of the triplets around a cut at frame k if slot ``before`` continued with slot
+        ``after``'s remainder (arrays of slot indices)."""
+        xy = self.xy
+        cost = np.zeros(before.size)
         if k >= 2:  # the triplet centred on frame k-1
-            a = self.xy[:, k - 2][:, None]
-            b = self.xy[:, k - 1][:, None]
-            new += self.triplet_cost(np.broadcast_to(a, (slots, slots, 2)), np.broadcast_to(b, (slots, slots, 2)),
-                                     np.broadcast_to(self.xy[:, k][None], (slots, slots, 2)))
+            cost += self.triplet_cost(xy[before, k - 2], xy[before, k - 1], xy[after, k])
         if k + 1 < self.n_frames:  # the triplet centred on frame k
-            b = self.xy[:, k - 1][:, None]
-            new += self.triplet_cost(np.broadcast_to(b, (slots, slots, 2)),
-                                     np.broadcast_to(self.xy[:, k][None], (slots, slots, 2)),
-                                     np.broadcast_to(self.xy[:, k + 1][None], (slots, slots, 2)))
-        old = np.diag(new)
-        return old[:, None] + old[None, :] - new - new.T
+            cost += self.triplet_cost(xy[before, k - 1], xy[after, k], xy[after, k + 1])
+        return cost
 
     def refresh(self, k: int) -> None:
-        if not 1 <= k < self.n_frames or self.xy.shape[0] < 2:
+        """Find the best swap at frame k among the slots it can change."""
+        if not 1 <= k < self.n_frames:
             return
-        gain = np.triu(self.cut_gains(k), 1)
-        flat = int(np.argmax(gain))
-        self.best[k] = gain.flat[flat]
-        self.pair[k] = divmod(flat, gain.shape[0])
+        self.best[k] = -np.inf
+        slots = self.cut_slots(k)
+        i, j = np.triu_indices(slots.size, 1)
+        i, j = slots[i], slots[j]
+        # Both new links must be allowed (or touch a phantom) for a swap to be worth pricing.
+        if self.d_max is not None:
+            def reach(a, b):
+                return ~(np.hypot(*(self.xy[b, k] - self.xy[a, k - 1]).T) > self.d_max)
+
+            allowed = reach(i, j) & reach(j, i)
+            i, j = i[allowed], j[allowed]
+        if i.size == 0:
+            return
+        old = np.zeros(self.xy.shape[0])
+        old[slots] = self.cut_cost(k, slots, slots)
+        gain = old[i] + old[j] - self.cut_cost(k, i, j) - self.cut_cost(k, j, i)
+        best = int(np.argmax(gain))
+        self.best[k] = gain[best]
+        self.pair[k] = (i[best], j[best])
 
     def run(self) -> None:
         for k in range(1, self.n_frames):

@@ -1,0 +1,116 @@
+"""PSMG data, the tracker registry, the peers and ``seedtrack experiment`` at a tiny size."""
+
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.experiments import EXPERIMENTS, Task, run_task, trackers_of
+from app.peers import PEERS, PeerFailure, peers_available
+from data.csvio import read_table
+from data.psmg import PSMGSpec, generate_psmg
+from tracking.trackers import TRACKERS, estimate_speed_limit, run_tracker
+
+
+def test_psmg_is_deterministic_stays_in_view_and_matches_its_truth():
+    spec = PSMGSpec(trajectories=30, frames=12, mean_speed=4, speed_sigma=0.5, speed_step_sigma=0.3,
+                    angle_step_sigma=7, occlusion=0.2, random_seed=11)
+    frames, truth = generate_psmg(spec)
+    again, _ = generate_psmg(spec)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, again))
+    assert truth.xy.shape == (30, 12, 2)
+    assert ((truth.xy >= 0) & (truth.xy <= spec.size)).all()
+    hidden = truth.measurement == -1
+    assert not hidden[:, [0, 1, 2, -3, -2, -1]].any()
+    assert not (hidden[:, 1:] & hidden[:, :-1]).any()
+    assert 0 < hidden.mean() < 0.2
+    for k, points in enumerate(frames):
+        seen = ~hidden[:, k]
+        np.testing.assert_array_equal(points[truth.measurement[seen, k]], truth.xy[seen, k])
+        assert len(points) == seen.sum()
+    speed = np.hypot(*np.diff(truth.xy, axis=1).T)
+    assert speed.max() <= spec.speed_limit + 1e-9
+
+
+def test_psmg_refuses_speeds_that_cannot_stay_in_view():
+    with pytest.raises(ValueError, match="stay in a 20 px view"):
+        generate_psmg(PSMGSpec(trajectories=5, frames=20, size=20, mean_speed=10, angle_step_sigma=1))
+
+
+@pytest.mark.parametrize("name", sorted(TRACKERS))
+def test_every_registered_tracker_follows_separate_straight_points(name):
+    frames, truth = generate_psmg(PSMGSpec(trajectories=5, frames=8, size=200, mean_speed=3, random_seed=2))
+    tracks = run_tracker(name, frames, max_speed=6.0)
+    paths = {tuple(np.round(row[~np.isnan(row[:, 0])], 9).ravel()) for row in tracks.xy}
+    assert paths == {tuple(np.round(row, 9).ravel()) for row in truth.xy}
+
+
+def test_estimated_speed_limit_covers_the_true_speeds():
+    frames, truth = generate_psmg(PSMGSpec(trajectories=20, frames=10, mean_speed=5, speed_sigma=1, random_seed=3))
+    fastest = np.hypot(*np.diff(truth.xy, axis=1).T).max()
+    assert fastest <= estimate_speed_limit(frames) <= 3 * fastest
+
+
+needs_peers = pytest.mark.skipif(not peers_available(), reason="the peers extra (trackpy, laptrack) is not installed")
+
+
+@needs_peers
+@pytest.mark.parametrize("name", sorted(PEERS))
+def test_peers_link_separate_points(name):
+    frames, truth = generate_psmg(PSMGSpec(trajectories=4, frames=6, size=200, mean_speed=3, random_seed=5))
+    tracks = PEERS[name](frames, 6.0, 0)
+    assert tracks.n_tracks == 4
+
+
+@needs_peers
+def test_trackpy_giving_up_is_a_recorded_failure():
+    rng = np.random.default_rng(0)
+    frames = [rng.uniform(0, 10, size=(40, 2)) for _ in range(3)]
+    with pytest.raises(PeerFailure, match="SubnetOversize"):
+        PEERS["trackpy"](frames, 30.0, 0)
+
+
+def test_a_run_scores_every_tracker_on_the_same_data():
+    experiment = EXPERIMENTS["density"]
+    rows = run_task(Task("density", 0, 0, True, trackers_of(experiment)))
+    assert [r["tracker"] for r in rows] == list(trackers_of(experiment))
+    assert len({r["seed"] for r in rows}) == 1
+    assert all(0 <= r["track_error"] <= 1 for r in rows if not r["failed"])
+
+
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+def test_every_experiment_runs_at_a_tiny_size(name, tmp_path, capsys):
+    assert main(["experiment", name, "--out", str(tmp_path), "--runs", "1", "--tiny"]) == 0
+    experiment = EXPERIMENTS[name]
+    cases = experiment.cases(True)
+    results = read_table(tmp_path / f"{name}.csv", required=("run", "seed", "failed"))
+    assert len(results["tracker"]) == len(cases) * len(trackers_of(experiment))
+    summary = read_table(tmp_path / f"{name}-summary.csv", required=("runs", "failures"))
+    assert set(summary["runs"]) == {1}
+    image = cv2.imread(str(tmp_path / f"{name}.png"))
+    assert image is not None and image.shape[1] == 960
+    if name == "ipan-table":
+        assert "published_ipan" in summary and "merit" in summary
+    assert ("seconds" in results) == (name == "volume")
+
+
+def test_same_options_give_the_same_files(tmp_path):
+    outputs = []
+    for folder in ("a", "b"):
+        out = tmp_path / folder
+        result = subprocess.run(
+            [sys.executable, "-m", "app", "experiment", "occlusion", "--out", str(out), "--runs", "2", "--jobs", "2", "--tiny"],
+            capture_output=True, text=True,
+        )
+        assert result.returncode == 0, result.stderr
+        outputs.append([(out / f"occlusion{suffix}").read_bytes() for suffix in (".csv", "-summary.csv", ".png")])
+    assert outputs[0] == outputs[1]
+
+
+def test_bad_run_count_is_a_one_line_error(tmp_path, capsys):
+    assert main(["experiment", "density", "--out", str(tmp_path), "--runs", "0"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--runs must be at least 1" in error
