@@ -137,7 +137,7 @@ RUNNERS: dict[str, Runner] = {
     "goa im2 cm2 w=0.1": _given_links(GOAConfig(combined=CombinedModel("cm2", w1=0.1, w2=0.1))),
     **{name: _peer(name) for name in PEERS},
 }
-OURS = ("goa", "goa-updown", "nn", "ss", "rs", "ipan")
+OURS = ("goa", "goa-updown", "goa-updown-fixed", "nn", "ss", "rs", "ipan")
 
 
 def _base(tiny: bool) -> PSMGSpec:
@@ -245,7 +245,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "strict trajectory merit, % (Chetverikov-Verestoy table)",
             "trajectories",
             _ipan_table_cases,
-            ("ipan", "goa-updown"),
+            ("ipan", "goa-updown", "goa-updown-fixed"),
             measure="merit",
             with_peers=False,
         ),

@@ -18,6 +18,7 @@ from data.trackfile import write_tracks
 from data.video import write_video
 from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, detect_blobs
 from tracking.goa import GOAConfig, goa_updown, pass_steps
+from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
 from tracking.tracks import Tracks
 
 from .overlay import overlay_frames
@@ -81,10 +82,13 @@ def detect_clip(path: Path, options: BlobOptions) -> tuple[Detections, float]:
         return Detections(np.array(indices), columns), source.fps
 
 
-def track_detections(detections: Detections, config: GOAConfig) -> Tracks:
-    """Link the detections into tracks with GOA-updown, with a progress bar."""
-    with progress_bar(pass_steps(len(detections.columns)), "tracking", unit="step") as bar:
-        return goa_updown(detections.points, config, progress=bar.update)
+def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
+    """GOA-updown with a progress bar: open (tracks start and end anywhere) or, with ``lifecycle``
+    None, the paper's fixed count of tracks. ``first_frame`` is the 0-based index of ``frames[0]``."""
+    with progress_bar(pass_steps(len(frames)), "tracking", unit="step") as bar:
+        if lifecycle is None:
+            return goa_updown(frames, config, first_frame, progress=bar.update)
+        return goa_updown_open(frames, config, lifecycle, first_frame, progress=bar.update)
 
 
 def render_overlay(path: Path, tracks: Tracks, frame_indices: np.ndarray, out: Path, fps: float, trail: int = 10) -> None:
@@ -111,8 +115,18 @@ def prepare_output_folder(folder: Path) -> None:
         raise DataError(folder, "exists and is not a folder")
 
 
-def run_pipeline(clip: Path, out: Path, options: BlobOptions, config: GOAConfig) -> tuple[Detections, Tracks]:
-    """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
+def run_pipeline(
+    clip: Path,
+    out: Path,
+    options: BlobOptions,
+    config: GOAConfig,
+    lifecycle: LifecycleConfig | None = LifecycleConfig(),
+    min_length: int = 0,
+) -> tuple[Detections, Tracks]:
+    """Detect, track and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
+
+    Tracking is :func:`link_frames` with ``lifecycle``; tracks spanning fewer than ``min_length``
+    frames are not written.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished.
@@ -120,7 +134,7 @@ def run_pipeline(clip: Path, out: Path, options: BlobOptions, config: GOAConfig)
     prepare_output_folder(out)
     detections, fps = detect_clip(clip, options)
     write_table(out / "detections.csv", detections.to_rows())
-    tracks = track_detections(detections, config)
+    tracks = drop_short(link_frames(detections.points, config, lifecycle), min_length)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
     render_overlay(clip, tracks, detections.frame_indices, out / "overlay.mp4", fps)
     return detections, tracks

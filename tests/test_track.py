@@ -77,18 +77,21 @@ def test_row_order_does_not_change_the_output(scene, tmp_path):
     assert outputs[0] == outputs[1]
 
 
-@pytest.mark.parametrize("algorithm", ["goa", "goa-updown"])
+@pytest.mark.parametrize("algorithm", ["goa", "goa-updown", "goa-updown-fixed"])
 def test_a_frame_number_without_points_is_bridged(tmp_path, algorithm):
-    # Two points moving steadily; frame 5 is absent from the file (nothing measured there).
+    # Two points moving steadily; frame 6 is absent from the file (nothing measured there).
+    # Three frames on each side: the open GOA-updown opens a track only on three measured frames in a row.
+    frames = [3, 4, 5, 7, 8, 9]
+    rows = [f"{k},{10 + 2 * (k - 3)},10,5\n{k},50,{50 + 3 * (k - 3)},6\n" for k in frames]
     points = tmp_path / "points.csv"
-    points.write_text("frame,x,y,area\n3,10,10,5\n3,50,50,6\n4,12,10,5\n4,50,53,6\n6,16,10,5\n6,50,59,6\n7,18,10,5\n7,50,62,6\n")
+    points.write_text("frame,x,y,area\n" + "".join(rows))
     out = tmp_path / "tracks.csv"
     assert main(["track", str(points), "--out", str(out), "--algorithm", algorithm]) == 0
     tracks = read_table(out)
-    assert list(tracks["frame"]) == [3, 4, 5, 6, 7] * 2
-    assert list(tracks["interpolated"]) == [0, 0, 1, 0, 0] * 2
-    assert np.allclose(tracks["x"][:5], [10, 12, 14, 16, 18]) and np.allclose(tracks["y"][5:], [50, 53, 56, 59, 62])
-    assert list(tracks["area"]) == ["5", "5", "", "5", "5", "6", "6", "", "6", "6"]
+    assert list(tracks["frame"]) == list(range(3, 10)) * 2
+    assert list(tracks["interpolated"]) == [0, 0, 0, 1, 0, 0, 0] * 2
+    assert np.allclose(tracks["x"][:7], np.arange(10, 24, 2)) and np.allclose(tracks["y"][7:], np.arange(50, 71, 3))
+    assert list(tracks["area"]) == ["5", "5", "5", "", "5", "5", "5", "6", "6", "6", "", "6", "6", "6"]
 
 
 def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):
@@ -103,9 +106,9 @@ def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):
 def test_model_options_reach_the_tracker(scene, tmp_path, model):
     folder, columns = scene
     out = tmp_path / "tracks.csv"
-    assert main(["track", str(folder / "points.csv"), "--out", str(out), model, "--max-speed", "12"]) == 0
+    assert main(["track", str(folder / "points.csv"), "--out", str(out), model, "--max-speed", "12", "--fixed-count"]) == 0
     tracks = read_table(out)
-    # GOA keeps one track per first-frame point; a point no track takes is left out, none is used twice.
+    # Fixed-count GOA-updown keeps one track per first-frame point; a point no track takes is left out, none is used twice.
     labels = tracks["label"][tracks["interpolated"] == 0]
     assert len(set(labels)) == labels.size and set(labels) <= set(columns["label"])
     assert len(set(tracks["track_id"])) == (columns["frame"] == FIRST_FRAME).sum()

@@ -38,8 +38,8 @@ def _ends(frames: Sequence[np.ndarray], assignment: np.ndarray, reverse: bool) -
         ok = (column >= 0) & (column < n)
         at = np.where(ok, column, 0)
         xy.append(everything[np.where(ok, offset[at] + assignment[np.arange(n_tracks), at], -1)])
-    velocity = (xy[0] - xy[1]) / (outer - inner)[:, None]
-    return outer, xy[0], -velocity if reverse else velocity
+    # (outer - inner) is negative at a start, so the velocity points forwards in time either way.
+    return outer, xy[0], (xy[0] - xy[1]) / (outer - inner)[:, None]
 
 
 def close_gaps(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:

@@ -29,6 +29,8 @@ from .initialisation import _extent, pairs_within
 from .motion import Candidates
 from .tracks import Tracks, tracks_from_assignment
 
+# Next frames in which a track back from slaves must show that its motion continues.
+_CONTINUATION_FRAMES = 2
 # Frames a track must hold in a row to open near the end of a pass, where fewer than
 # ``lookahead`` frames remain: one triplet, the least that shows smooth motion.
 _SHORTEST_CONFIRMATION = 3
@@ -50,7 +52,6 @@ class LifecycleConfig:
 
     max_gap: int = 10
     close_gaps: bool = True
-    pass_gap: int | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_gap, (int, np.integer)) and self.max_gap >= 0):
@@ -80,19 +81,19 @@ class _Heads:
         self.slaves = np.concatenate((self.slaves, until - last_step))
         self.running = np.concatenate((self.running, np.ones(rows.shape[0], bool)))
 
-    def extend(self, step: int, points: np.ndarray, after: np.ndarray | None, config: GOAConfig, max_gap: int) -> np.ndarray:
+    def extend(self, step: int, points: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig, max_gap: int) -> np.ndarray:
         """Assign the running heads to the frame at ``step``; returns the measurements taken.
 
-        ``after`` holds the measurements of the next frame (None at the last): a head that
+        ``after`` holds the measurements of the next frames (none at the last): a head that
         comes back from slaves keeps its measurement only if the motion continues smoothly
-        into it, since a point that enters the view near where a track was lost can fit the
-        gap-normalised step as well as the lost point would.
+        into one of them, since a point that enters the view near where a track was lost can
+        fit the gap-normalised step as well as the lost point would.
         """
         running = np.flatnonzero(self.running)
         state = _HeadState(self.state.last_xy[running], self.state.last_step[running], self.state.velocity[running])
         taken = assign_step(state, step, points, config)
         back = (taken != UNASSIGNED) & (step - state.last_step > 1)
-        if after is not None and back.any():
+        if len(after) and back.any():
             gap = step - state.last_step[back]
             bridge = (points[taken[back]] - state.last_xy[back]) / gap[:, None]
             taken[np.flatnonzero(back)[~_continues(points[taken[back]], bridge, after, config)]] = UNASSIGNED
@@ -106,22 +107,25 @@ class _Heads:
         return taken[~missed]
 
 
-def _continues(origin: np.ndarray, velocity: np.ndarray, after: np.ndarray, config: GOAConfig) -> np.ndarray:
-    """Boolean per origin: some measurement of the next frame continues ``velocity`` within phi_max."""
+def _continues(origin: np.ndarray, velocity: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
+    """Boolean per origin: a measurement of one of the frames ``after`` (the next frames, in
+    order) continues ``velocity`` within phi_max, so a point hidden again right after it
+    reappears keeps its track."""
+    found = np.zeros(origin.shape[0], bool)
     speed = np.hypot(*velocity.T)
     radius = config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max)
     if config.d_max is not None:
         radius = np.minimum(radius, config.d_max)
-    radius = np.where(np.isfinite(radius), radius, _extent(after))
-    owner, target = pairs_within(origin, radius, after)
-    pairs = Candidates(owner, target, after[target] - origin[owner], np.ones(owner.size, np.int64), velocity[owner])
-    speed_out = np.hypot(*pairs.velocity.T)
-    scale = config.d_max if config.d_max is not None else max(float(speed_out.max(initial=0.0)), 1.0)
-    ok = (config.individual.cost(pairs, config.phi_max, scale) <= config.phi_max) & (speed_out >= config.d_min)
-    if config.d_max is not None:
-        ok &= speed_out <= config.d_max
-    found = np.zeros(origin.shape[0], bool)
-    found[owner[ok]] = True
+    for gap, points in enumerate(after, start=1):
+        reach = np.where(np.isfinite(radius), radius * gap, _extent(points))
+        owner, target = pairs_within(origin, reach, points)
+        pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner])
+        speed_out = np.hypot(*pairs.velocity.T)
+        scale = config.d_max if config.d_max is not None else max(float(speed_out.max(initial=0.0)), 1.0)
+        ok = (config.individual.cost(pairs, config.phi_max, scale) <= config.phi_max) & (speed_out >= config.d_min)
+        if config.d_max is not None:
+            ok &= speed_out <= config.d_max
+        found[owner[ok]] = True
     return found
 
 
@@ -195,7 +199,7 @@ def open_pass(
     first_step = initial.shape[1] if initial.shape[0] else 1
     for step in range(1, n):
         if step >= first_step:
-            after = frames[step + 1] if step + 1 < n else None
+            after = frames[step + 1 : step + 1 + _CONTINUATION_FRAMES]
             free[step][heads.extend(step, frames[step], after, config, max_gap)] = False
         start = step - window + 1
         if start >= 0:
@@ -246,11 +250,10 @@ def goa_updown_open(
     """
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
     n = len(frames)
-    pg = lifecycle.max_gap if lifecycle.pass_gap is None else lifecycle.pass_gap
-    up = open_pass(frames, np.empty((0, 2), np.int64), config, pg, progress)
+    up = open_pass(frames, np.empty((0, 2), np.int64), config, lifecycle.max_gap, progress)
     backwards = frames[::-1]
     last = up[:, ::-1][:, :2]
-    down = open_pass(backwards, last[last[:, 0] != UNASSIGNED] if n >= 2 else last[:0], config, pg, progress)
+    down = open_pass(backwards, last[last[:, 0] != UNASSIGNED] if n >= 2 else last[:0], config, lifecycle.max_gap, progress)
     assignment = down[:, ::-1]
     if lifecycle.close_gaps:
         assignment = close_gaps(frames, assignment, config, lifecycle.max_gap)

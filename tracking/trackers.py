@@ -13,6 +13,7 @@ import numpy as np
 
 from .goa import GOAConfig, goa_updown
 from .ipan import IPANConfig, ipan
+from .lifecycle import LifecycleConfig, goa_updown_open
 from .nn import nearest_neighbour
 from .rs import rangarajan_shah
 from .ss import sethi_jain
@@ -70,7 +71,13 @@ TRACKERS: dict[str, Tracker] = {
     for t in (
         Tracker(
             "goa-updown",
-            "GOA-updown (Veenman et al. 2001): self-initialising greedy optimal assignment, IM2, slaves",
+            "GOA-updown with track initiation and termination: tracks open from leftover points confirmed "
+            "over five frames, end after 10 missed frames, and are joined across gaps of up to 10 frames",
+            lambda frames, max_speed, first: goa_updown_open(frames, GOAConfig(d_max=max_speed), LifecycleConfig(), first),
+        ),
+        Tracker(
+            "goa-updown-fixed",
+            "GOA-updown as published (Veenman et al. 2001): one track per point of the first frame, IM2, slaves",
             lambda frames, max_speed, first: goa_updown(frames, GOAConfig(d_max=max_speed), first),
         ),
         Tracker(

@@ -12,7 +12,7 @@ from tracking.metrics import score_tracks
 
 from ..errors import UsageError
 from ..pipeline import prepare_output_folder, run_pipeline
-from .run import add_tracker_options, tracker_config
+from .run import add_tracker_options, lifecycle_config, tracker_config
 
 
 def add_parser(subparsers) -> None:
@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    config = tracker_config(args)
+    config, lifecycle = tracker_config(args), lifecycle_config(args)
     try:
         spec = DishSpec(
             seeds=args.seeds,
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     prepare_output_folder(args.out)
     scene = write_dish_clip(spec, args.out)
-    run_pipeline(args.out / "clip.mp4", args.out, BlobOptions(), config)
+    run_pipeline(args.out / "clip.mp4", args.out, BlobOptions(), config, lifecycle, args.min_length)
     result = read_tracks(args.out / "tracks.csv")
     scores = score_tracks(result, scene.truth, args.tol)
     print(

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from detection.blobs import BlobOptions
 from tracking.goa import GOAConfig
+from tracking.lifecycle import LifecycleConfig
 
 from ..errors import UsageError
 from ..pipeline import run_pipeline
@@ -29,6 +30,28 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         metavar="X",
         help="largest smoothness cost of a link (IM2, 0..1.1); also the cost of a missed or false point (default 0.1)",
     )
+    group.add_argument(
+        "--max-gap",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"a track ends after N missed frames in a row; gaps up to N frames are filled by interpolation "
+        f"(interpolated=1) and a track end is joined to a track start at most N frames later "
+        f"(default {LifecycleConfig().max_gap})",
+    )
+    group.add_argument(
+        "--fixed-count",
+        action="store_true",
+        default=None,
+        help="GOA-updown as published: one track per point of the first frame, none starts or ends later",
+    )
+    group.add_argument(
+        "--min-length",
+        type=int,
+        default=0,
+        metavar="N",
+        help="write only tracks spanning at least N frames, gaps included (default 0: every track)",
+    )
 
 
 def tracker_config(args: argparse.Namespace) -> GOAConfig:
@@ -45,12 +68,32 @@ def tracker_config(args: argparse.Namespace) -> GOAConfig:
         raise UsageError(str(error)) from None
 
 
+def lifecycle_config(args: argparse.Namespace) -> LifecycleConfig | None:
+    """When tracks open and end, or None for the fixed-count scheme (``--fixed-count``).
+
+    Raises
+    ------
+    UsageError
+        If --max-gap or --min-length is negative, or --max-gap comes with --fixed-count.
+    """
+    for option in ("max_gap", "min_length"):
+        value = getattr(args, option)
+        if value is not None and value < 0:
+            raise UsageError(f"--{option.replace('_', '-')} must be a whole number of frames >= 0, got {value}")
+    if args.fixed_count:
+        if args.max_gap is not None:
+            raise UsageError("--max-gap does not apply with --fixed-count (no track ends)")
+        return None
+    return LifecycleConfig() if args.max_gap is None else LifecycleConfig(max_gap=args.max_gap)
+
+
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run",
         help="detect, track and draw a clip",
-        description="Detect blobs in every frame of INPUT, link them into tracks with GOA-updown, and write "
-        "DIR/detections.csv, DIR/tracks.csv and DIR/overlay.mp4.",
+        description="Detect blobs in every frame of INPUT, link them into tracks with GOA-updown (tracks open "
+        "and end anywhere in the clip unless --fixed-count), and write DIR/detections.csv, DIR/tracks.csv and "
+        "DIR/overlay.mp4.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
@@ -59,8 +102,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    config = tracker_config(args)
-    detections, tracks = run_pipeline(args.input, args.out, BlobOptions(), config)
+    config, lifecycle = tracker_config(args), lifecycle_config(args)
+    detections, tracks = run_pipeline(args.input, args.out, BlobOptions(), config, lifecycle, args.min_length)
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
         f"{len(detections.columns)} frames, {measured} detections, {tracks.n_tracks} tracks; "

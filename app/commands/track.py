@@ -11,19 +11,24 @@ import numpy as np
 
 from data.csvio import TRACK_COLUMNS, read_table, write_table
 from data.errors import DataError
-from tracking.goa import GOAConfig, goa, goa_updown, initial_links, pass_steps
+from tracking.goa import GOAConfig, goa, initial_links
+from tracking.lifecycle import drop_short
 from tracking.motion import CombinedModel, IndividualModel
 from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
 
 from ..errors import UsageError
+from ..pipeline import link_frames
 from ..progress import progress_bar
-from .run import add_tracker_options
+from .run import add_tracker_options, lifecycle_config
 
 POINT_COLUMNS = ("frame", "x", "y")
 FIRST_LINKS = {"lookahead": "lookahead", "nearest": "im1"}
 # Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
+_GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
 _GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links")
+# Options of the open GOA-updown (the default) alone.
+_OPEN_ONLY = ("max_gap", "fixed_count")
 
 DESCRIPTION = """\
 Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any other columns are
@@ -36,11 +41,17 @@ Frame numbers are the input's. A frame number missing between the first and the 
 which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
 rows. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
 
-Algorithms: goa-updown (default) initialises itself, tracks forwards, then backwards from the
-forward pass's last links. goa is the paper's single forward pass from given first links; here they
-are the links between the first two frames that --first-links chooses. Both keep one track per point
-of the first frame. nn, ss, rs and ipan are the paper's comparison trackers; they start and end
-tracks anywhere and take only --max-speed.
+Algorithms: goa-updown (default) tracks forwards, then backwards in time, and lets tracks come and
+go: at each frame the running tracks take their points first (GOA's optimal assignment, with slaves
+for missed points), then the points left over open new tracks when they chain smoothly over the
+next five frames, so that a false point does not open one. A track ends after --max-gap missed
+frames in a row; afterwards a track end is joined to a later track start when the motion model says
+they are one object. Gaps inside a track are filled by interpolation (interpolated=1).
+goa-updown-fixed (or goa-updown --fixed-count) is GOA-updown as published: it initialises itself
+and keeps one track per point of the first frame. goa is the paper's single forward pass from given
+first links; here they are the links between the first two frames that --first-links chooses. nn,
+ss, rs and ipan are the paper's comparison trackers; they start and end tracks anywhere and take
+only --max-speed. --min-length applies to every algorithm.
 
 Without --max-speed there is no speed limit: the smoothness limit --phi-max bounds a moving point
 and the first links are chosen among each point's nearest neighbours, which suits data whose speed
@@ -167,23 +178,31 @@ def _check_options(args: argparse.Namespace) -> None:
         if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
             kind = "a non-negative" if allow_zero else "a positive"
             raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
-    if args.algorithm not in ("goa", "goa-updown"):
+    if args.algorithm not in _GOA_FAMILY:
         given = [f"--{name.replace('_', '-')}" for name in _GOA_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
+    if args.algorithm != "goa-updown":
+        given = [f"--{name.replace('_', '-')}" for name in _OPEN_ONLY if getattr(args, name) is not None]
+        if given:
+            raise UsageError(f"{', '.join(given)} only apply to --algorithm goa-updown, not {args.algorithm}")
+    lifecycle_config(args)
 
 
 def track_points(points: Points, args: argparse.Namespace) -> Tracks:
-    """Run the tracker the options name on the points, with a progress bar for GOA."""
+    """Run the tracker the options name on the points (progress bar for GOA), then drop the
+    tracks shorter than --min-length."""
     frames, first = points.frames, points.first_frame
-    if args.algorithm not in ("goa", "goa-updown"):
-        return run_tracker(args.algorithm, frames, args.max_speed, first)
-    config = goa_config(args)
-    if args.algorithm == "goa-updown":
-        with progress_bar(pass_steps(len(frames)), "tracking", unit="step") as bar:
-            return goa_updown(frames, config, first, progress=bar.update)
-    with progress_bar(len(frames) - 2, "tracking", unit="step") as bar:
-        return goa(frames, initial_links(frames, config), config, first, progress=bar.update)
+    if args.algorithm not in _GOA_FAMILY:
+        tracks = run_tracker(args.algorithm, frames, args.max_speed, first)
+    elif args.algorithm == "goa":
+        config = goa_config(args)
+        with progress_bar(len(frames) - 2, "tracking", unit="step") as bar:
+            tracks = goa(frames, initial_links(frames, config), config, first, progress=bar.update)
+    else:
+        lifecycle = None if args.algorithm == "goa-updown-fixed" else lifecycle_config(args)
+        tracks = link_frames(frames, goa_config(args), lifecycle, first)
+    return drop_short(tracks, args.min_length)
 
 
 def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
