@@ -40,6 +40,10 @@ _SUPERSAMPLING = 4
 _CANDIDATES_PER_SEED = 200
 # Distinct streams from one random_seed, so that adding a knob never changes the noise.
 _NOISE_STREAM = 1
+_COMINGS_AND_GOINGS_STREAM = 2
+# Frames a seed that is hidden, added or removed stays in view at each end of a clip, at least:
+# the fewest measured frames in a row from which a track can start.
+_SHOWN_AT_ENDS = 3
 
 
 @dataclass(frozen=True)
@@ -62,6 +66,17 @@ class DishSpec:
     hidden_probability : float
         Probability, independently per seed and frame (frame 0 included), that a seed is not
         drawn.
+    hidden_seeds : int
+        Seeds hidden once for ``hidden_frames`` frames in a row (as by a hand), each from a
+        random frame that leaves at least 3 frames in view before and after.
+    hidden_frames : int
+        Length of each of those hidings, frames.
+    added_seeds : int
+        Seeds put on the dish mid-clip: absent (NaN in the truth) before a random frame in
+        1..frames-3.
+    removed_seeds : int
+        Seeds taken off the dish mid-clip: absent after a random frame in 2..frames-2, so that
+        each is seen in at least 3 frames. Hidden, added and removed seeds are distinct.
     fps : float
         Frames per second of the clip written by :func:`write_dish_clip`.
     seed_length, seed_width : float
@@ -84,6 +99,10 @@ class DishSpec:
     rim_speed: float = 42.0
     random_seed: int = 0
     hidden_probability: float = 0.0
+    hidden_seeds: int = 0
+    hidden_frames: int = 0
+    added_seeds: int = 0
+    removed_seeds: int = 0
     fps: float = 25.0
     seed_length: float = 7.0
     seed_width: float = 3.5
@@ -101,6 +120,16 @@ class DishSpec:
             (_is_int(self.random_seed) and self.random_seed >= 0, "random_seed must be a whole number >= 0"),
             (0 <= self.rim_speed < math.inf, "rim_speed must be finite and >= 0"),
             (0 <= self.hidden_probability <= 1, "hidden_probability must be in [0, 1]"),
+            (
+                all(_is_int(n) and n >= 0 for n in (self.hidden_seeds, self.hidden_frames, self.added_seeds, self.removed_seeds)),
+                "hidden_seeds, hidden_frames, added_seeds and removed_seeds must be whole numbers >= 0",
+            ),
+            (self.hidden_seeds + self.added_seeds + self.removed_seeds <= self.seeds, "more seeds hidden, added or removed than seeds"),
+            (
+                self.hidden_seeds == 0 or self.frames >= self.hidden_frames + 2 * _SHOWN_AT_ENDS,
+                "frames must be at least hidden_frames + 6 to hide seeds",
+            ),
+            (self.added_seeds + self.removed_seeds == 0 or self.frames >= 2 * _SHOWN_AT_ENDS, "frames must be at least 6 to add or remove seeds"),
             (0 < self.fps < math.inf, "fps must be finite and > 0"),
             (0 < self.seed_width <= self.seed_length, "need 0 < seed_width <= seed_length"),
             (self.seed_length < _DISH_RADIUS_FRACTION * min(self.width, self.height), "seed_length must be smaller than the dish"),
@@ -127,9 +156,10 @@ class DishScene:
     spec : DishSpec
         What was asked for.
     truth : Tracks
-        One track per seed over all frames; ``xy`` (seeds, frames, 2) in pixels is defined in
-        every frame, ``measurement`` is the seed index where the seed is drawn and -1 where it
-        is hidden, so hidden positions count as interpolated.
+        One track per seed; ``xy`` (seeds, frames, 2) in pixels is defined in every frame the
+        seed is on the dish (NaN before an added seed arrives and after a removed one leaves),
+        ``measurement`` is the seed index where the seed is drawn and -1 where it is hidden or
+        absent, so hidden positions count as interpolated.
     visible : ndarray of bool, shape (seeds, frames)
         Whether each seed is drawn in each frame.
     centre : tuple of float
@@ -207,6 +237,9 @@ def make_dish_scene(spec: DishSpec) -> DishScene:
     seed_grey = rng.uniform(*_SEED_GREY_RANGE, spec.seeds)
     visible = rng.random((spec.seeds, spec.frames)) >= spec.hidden_probability
     xy = centre + _rotate(start, angle)
+    on_dish, hand = _comings_and_goings(spec)
+    visible &= on_dish & ~hand
+    xy[~on_dish] = np.nan
     measurement = np.where(visible, np.arange(spec.seeds)[:, None], NO_MEASUREMENT)
     return DishScene(
         spec=spec,
@@ -246,6 +279,29 @@ def write_dish_clip(spec: DishSpec, out_dir: str | os.PathLike, *, progress=None
     write_video(out / "clip.mp4", scene.frames(), spec.fps, crf=crf, progress=progress)
     write_table(out / "truth.csv", scene.truth.to_rows())
     return scene
+
+
+def _comings_and_goings(spec: DishSpec) -> tuple[np.ndarray, np.ndarray]:
+    """(seeds, frames) bool arrays: whether each seed is on the dish, and whether a hand hides it.
+
+    Drawn from their own random stream, so a spec without hidden, added or removed seeds
+    renders exactly as before these knobs existed.
+    """
+    rng = np.random.default_rng((spec.random_seed, _COMINGS_AND_GOINGS_STREAM))
+    who = rng.permutation(spec.seeds)
+    end = np.cumsum([spec.hidden_seeds, spec.added_seeds, spec.removed_seeds])
+    hidden, added, removed = who[: end[0]], who[end[0] : end[1]], who[end[1] : end[2]]
+    frame = np.arange(spec.frames)
+    on_dish = np.ones((spec.seeds, spec.frames), bool)
+    arrival = rng.integers(1, spec.frames - _SHOWN_AT_ENDS + 1, size=added.size)
+    on_dish[added] = frame >= arrival[:, None]
+    departure = rng.integers(_SHOWN_AT_ENDS - 1, spec.frames - 1, size=removed.size)  # last frame on the dish
+    on_dish[removed] = frame <= departure[:, None]
+    hand = np.zeros_like(on_dish)
+    if hidden.size:
+        begin = rng.integers(_SHOWN_AT_ENDS, spec.frames - _SHOWN_AT_ENDS - spec.hidden_frames + 1, size=hidden.size)
+        hand[hidden] = (frame >= begin[:, None]) & (frame < begin[:, None] + spec.hidden_frames)
+    return on_dish, hand
 
 
 def _place_seeds(rng: np.random.Generator, count: int, max_radius: float, separation: float) -> np.ndarray:
