@@ -1,6 +1,7 @@
 """Open GOA-updown: tracks that start, end and come back, on exact scenes, generated clips and random points."""
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +12,9 @@ from app.cli import main
 from app.experiments import BASE
 from data.csvio import read_table, write_table
 from data.dish import DishSpec, make_dish_scene
+from data.frames import open_frames
 from data.psmg import generate_psmg
+from detection.blobs import BlobOptions, detect_blobs
 from tracking.gap_closing import close_gaps
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
@@ -188,3 +191,16 @@ def test_track_refuses_bad_lifecycle_options(tmp_path, capsys, options, message)
     assert main(["track", str(points), "--out", str(out), *options]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+BEADS = Path(__file__).resolve().parents[2] / "shared" / "data" / "bulk-water-240-479.mp4"
+
+
+@pytest.mark.skipif(not BEADS.exists(), reason="the real bead footage is not in this checkout's ../shared/data")
+def test_invariants_hold_on_real_beads_with_default_options():
+    with open_frames(BEADS, start=100, end=106) as source:
+        frames = [np.column_stack((c["x"], c["y"])) for c in (detect_blobs(image, BlobOptions()) for _, image in source)]
+    tracks = goa_updown_open(frames)
+    _check_invariants(tracks, frames)
+    measured = (tracks.measurement >= 0).sum(axis=0)
+    assert (measured <= [len(f) for f in frames]).all() and measured.min() > 0
