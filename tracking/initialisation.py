@@ -17,6 +17,9 @@ from scipy.spatial import cKDTree
 
 from .motion import IndividualModel, smooth_motion_cost
 
+# Weight of the first link's own IM1 cost in its score: small enough only to break ties.
+_TIE_BREAK = 1e-6
+
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All (origin, point) index pairs with the point within the origin's radius."""
@@ -85,9 +88,10 @@ def first_links(
     if d_max is not None:
         valid &= speed <= d_max
     head, measurement = head[valid], measurement[valid]
+    # IM1: dividing first keeps the fastest link at exactly phi_max, not a rounding step above.
+    nearest = phi_max * (speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)))
     if horizon < 3:
-        cost = phi_max * speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0))
-        return head, measurement, cost
+        return head, measurement, nearest
 
     # Links of each step, as (from, to) index pairs; triplets chain link a of step k to
     # link b of step k + 1 with a.to == b.from.
@@ -145,9 +149,11 @@ def first_links(
         best = np.full(links[step][0].size, missing)
         np.minimum.at(best, link_in, triplet_cost + to_go[link_out])
         to_go = best
-    # The mean of costs within phi_max is within phi_max; clipping keeps rounding from pruning
-    # a link whose path cannot be continued at all (e.g. across a frame without points).
-    return head, measurement, np.minimum(to_go / len(triplets), phi_max)
+    # Paths that end alike (e.g. through slaves) tie; the shorter first link then wins, so that
+    # the choice does not depend on the order of the measurements. The mix of two costs within
+    # phi_max is within phi_max; clipping keeps rounding from pruning a link at the limit.
+    cost = (1 - _TIE_BREAK) * to_go / len(triplets) + _TIE_BREAK * nearest
+    return head, measurement, np.minimum(cost, phi_max)
 
 
 def _first_candidates(
