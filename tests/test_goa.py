@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.experiments import BASE
+from app.experiments import BASE, EXPERIMENTS, Task, run_task
 from data.dish import DishSpec, make_dish_scene
 from data.psmg import generate_psmg
 from tracking.goa import GOAConfig, goa, goa_updown
@@ -143,3 +143,14 @@ def test_down_pass_restarts_tracks_the_up_pass_lost():
     restarted = score_tracks(goa_updown(frames, GOAConfig()), truth, 0.5)
     plain = score_tracks(goa_updown(frames, GOAConfig(restart_lost=False)), truth, 0.5)
     assert plain.correct_tracks <= restarted.correct_tracks - 3
+
+
+def test_im2_beats_im1_and_im3_on_a_density_sweep():
+    # The paper's model comparison (seedtrack experiment models), GOA given the first links,
+    # at three densities with three seeded runs each.
+    models = ("goa im1", "goa im2", "goa im3")
+    cases = EXPERIMENTS["models"].cases(False)
+    for index in (0, 2, 4):
+        rows = [row for run in range(3) for row in run_task(Task("models", index, run, False, models))]
+        error = {name: np.mean([r["track_error"] for r in rows if r["tracker"] == name]) for name in models}
+        assert error["goa im2"] < min(error["goa im1"], error["goa im3"]), (cases[index].x, error)
