@@ -14,6 +14,7 @@ import numpy as np
 NO_MEASUREMENT = -1
 
 
+
 @dataclass(frozen=True)
 class Tracks:
     """A set of tracks over consecutive frames.
@@ -212,3 +213,45 @@ def tracks_from_links(
         more = successor[current] >= 0
         row, current = row[more], successor[current[more]]
     return tracks_from_assignment(frames, assignment, first_frame)
+
+
+def point_frames(frames) -> list[np.ndarray]:
+    """The measurements every tracker takes: one float array of shape (M_k, 2) per frame.
+
+    Parameters
+    ----------
+    frames : sequence of array-like
+        Positions (x, y) per frame, pixels; an empty frame may have any empty shape.
+
+    Raises
+    ------
+    ValueError
+        If a frame is not a list of (x, y) pairs or holds a non-finite position.
+    """
+    out = []
+    for k, frame in enumerate(frames):
+        points = np.asarray(frame, dtype=float)
+        if points.size == 0:
+            points = points.reshape(0, 2)
+        if points.ndim != 2 or points.shape[1] != 2:
+            raise ValueError(f"frame {k} must hold (x, y) pairs, got shape {points.shape}")
+        if not np.isfinite(points).all():
+            raise ValueError(f"frame {k} holds a non-finite position")
+        out.append(points)
+    return out
+
+
+def check_limit(name: str, value: float | None, optional: bool = True) -> float | None:
+    """``value`` as a float when it is a positive limit (None passes when ``optional``).
+
+    Raises
+    ------
+    ValueError
+        Naming the limit, if it is not positive (or None where one is required).
+    """
+    if value is None and optional:
+        return None
+    if value is None or not float(value) > 0:
+        raise ValueError(f"{name} must be positive, got {value}")
+    return float(value)
+
