@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links
 from .motion import Candidates, CombinedModel, IndividualModel
-from .tracks import Tracks, link_speed_limit, tracks_from_assignment
+from .tracks import Tracks, check_limit, link_speed_limit, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
 
@@ -81,10 +81,8 @@ class GOAConfig:
     solver: str = "split"
 
     def __post_init__(self) -> None:
-        if not self.phi_max > 0:
-            raise ValueError(f"phi_max must be positive, got {self.phi_max}")
-        if self.d_max is not None and not self.d_max > 0:
-            raise ValueError(f"d_max must be positive, got {self.d_max}")
+        check_limit("phi_max", self.phi_max, optional=False)
+        check_limit("d_max", self.d_max)
         if self.d_min < 0 or (self.d_max is not None and self.d_min >= self.d_max):
             raise ValueError(f"d_min must be non-negative and below d_max, got {self.d_min}")
         if self.corner not in ("zero", "phi"):
@@ -324,7 +322,7 @@ def goa(
     Tracks
         One track per row of ``initial``; bound slaves interpolated.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     assignment = goa_pass(frames, np.asarray(initial, dtype=np.int64), config, progress)
     return tracks_from_assignment(frames, assignment, first_frame)
 
@@ -354,7 +352,7 @@ def goa_updown(
         and more added, by tracks that the down pass starts in the last frame; see
         ``GOAConfig.restart_lost``); bound slaves interpolated.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     if len(frames) < 2:
         assignment = np.arange(frames[0].shape[0])[:, None] if frames else np.empty((0, 0), np.int64)
         return tracks_from_assignment(frames, assignment, first_frame)
