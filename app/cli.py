@@ -12,10 +12,10 @@ from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import correct, demo, evaluate, experiment, review, run
+from .commands import compare, correct, demo, evaluate, experiment, render, review, run
 from .errors import UsageError
 
-COMMANDS = (run, demo, evaluate, correct, review, experiment)
+COMMANDS = (run, demo, render, compare, evaluate, correct, review, experiment)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
