@@ -187,6 +187,7 @@ class TrackLayer:
             self.palette = np.array([colour])
             self.colour_index = np.zeros(tracks.n_tracks, int)
         self._colours = [tuple(int(c) for c in colour) for colour in self.palette]
+        self._link_palette = np.vstack([self.palette, WARNING_BGR])
         n_frames = tracks.n_frames
         self.frame_indices = tracks.first_frame + np.arange(n_frames) if frame_indices is None else np.asarray(frame_indices)
         present = tracks.present
@@ -231,10 +232,10 @@ class TrackLayer:
             rows, ends, points = self.segments(low, column)
             age = column - ends
             alpha = np.round(255 * (self.trail - age) / self.trail).astype(int)
-            warned = self.warnings[rows, ends]
-            group = np.where(warned, len(self.palette), self.colour_index[rows])
-            _draw_faded(canvas, points, group, np.vstack([self.palette, WARNING_BGR]), alpha, warned, style.line)
-        self._draw_marks(canvas, column, style)
+            warned, group = self._link_colours(rows, ends)
+            _draw_faded(canvas, points, group, self._link_palette, alpha, warned, style.line)
+        # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
+        self._draw_marks(canvas, column - self.trail, column, style)
         present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
         for row in present:
             _draw_head(canvas, self.xy[row, column], self._colour(row), bool(self.hollow[row, column]), style)
@@ -242,14 +243,17 @@ class TrackLayer:
             for row in present:
                 _draw_label(canvas, str(self.ids[row]), self.xy[row, column], self._colour(row), style)
 
-    def _draw_marks(self, canvas: np.ndarray, column: int, style: Style) -> None:
-        # Marks stay visible for one trail length, so a start or end is seen for more than a frame.
-        shown = (self.start_column <= column) & (self.start_column >= column - self.trail)
-        for row, at in zip(self.starts[shown], self.start_column[shown]):
-            _draw_marker(canvas, self.xy[row, at], self._colour(row), cv2.MARKER_TRIANGLE_UP, style)
-        shown = (self.end_column <= column) & (self.end_column >= column - self.trail)
-        for row, at in zip(self.ends[shown], self.end_column[shown]):
-            _draw_marker(canvas, self.xy[row, at], self._colour(row), cv2.MARKER_SQUARE, style)
+    def _draw_marks(self, canvas: np.ndarray, low: int, high: int, style: Style) -> None:
+        """Mark the starts and ends that fall in columns ``low`` to ``high``."""
+        for rows, columns, kind in ((self.starts, self.start_column, cv2.MARKER_TRIANGLE_UP), (self.ends, self.end_column, cv2.MARKER_SQUARE)):
+            shown = (columns >= low) & (columns <= high)
+            for row, at in zip(rows[shown], columns[shown]):
+                _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style)
+
+    def _link_colours(self, rows: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each link is a warning, and its index into ``_link_palette`` (warnings last)."""
+        warned = self.warnings[rows, ends]
+        return warned, np.where(warned, len(self.palette), self.colour_index[rows])
 
     def _colour(self, row: int) -> tuple[int, int, int]:
         return self._colours[self.colour_index[row]]
@@ -257,16 +261,11 @@ class TrackLayer:
     def draw_summary(self, canvas: np.ndarray, style: Style) -> None:
         """Draw every whole trajectory with its start and end marks onto ``canvas`` in place."""
         rows, ends, points = self.segments(0, self.xy.shape[1] - 1)
-        warned = self.warnings[rows, ends]
-        group = np.where(warned, len(self.palette), self.colour_index[rows])
-        colours = np.vstack([self.palette, WARNING_BGR])
+        _, group = self._link_colours(rows, ends)
         for index in np.unique(group):
             chosen = group == index
-            cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in colours[index]), style.line, cv2.LINE_AA, SHIFT)
-        for row, at in zip(self.starts, self.start_column):
-            _draw_marker(canvas, self.xy[row, at], self._colour(row), cv2.MARKER_TRIANGLE_UP, style)
-        for row, at in zip(self.ends, self.end_column):
-            _draw_marker(canvas, self.xy[row, at], self._colour(row), cv2.MARKER_SQUARE, style)
+            cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in self._link_palette[index]), style.line, cv2.LINE_AA, SHIFT)
+        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style)
         if self.labels:
             present = ~np.isnan(self.xy[..., 0])
             for row in np.flatnonzero(present.any(axis=1)):
@@ -467,9 +466,13 @@ def annotate(
     if false_detections is not None:
         false_detections.draw(canvas, frame_index, style)
     draw_legend(canvas, legend, style)
-    (_, text_height), _ = cv2.getTextSize("0", _FONT, style.font, style.text)
-    draw_text(canvas, f"{title}frame {frame_index}", (text_height, 2 * text_height), _NEUTRAL, style.font, style.text)
+    _draw_title(canvas, f"{title}frame {frame_index}", style)
     return canvas
+
+
+def _draw_title(canvas: np.ndarray, text: str, style: Style) -> None:
+    (_, text_height), _ = cv2.getTextSize("0", _FONT, style.font, style.text)
+    draw_text(canvas, text, (text_height, 2 * text_height), _NEUTRAL, style.font, style.text)
 
 
 def annotate_frames(frames: Iterable[tuple[int, np.ndarray]], view: View, layers: Sequence[TrackLayer], **options) -> Iterator[tuple[int, np.ndarray]]:
@@ -491,6 +494,5 @@ def summary_picture(image: np.ndarray, view: View, layers: Sequence[TrackLayer],
         layer.draw_summary(canvas, style)
     draw_legend(canvas, [("start", _NEUTRAL, "track start"), ("end", _NEUTRAL, "track end")], style)
     if title:
-        (_, text_height), _ = cv2.getTextSize("0", _FONT, style.font, style.text)
-        draw_text(canvas, title, (text_height, 2 * text_height), _NEUTRAL, style.font, style.text)
+        _draw_title(canvas, title, style)
     return canvas

@@ -247,3 +247,22 @@ def test_compare_side_by_side_clip_is_twice_as_wide(clip, tmp_path, capsys):
     assert codec == "h264" and len(images) == 3
     assert images[0].shape[0] == HEIGHT and images[0].shape[1] >= 2 * WIDTH + 2
     assert "A 0 of" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name, kept", [("clip.mp4", []), ("clip.gif", []), ("frames/", ["frame_000000.png", "frame_000001.png"])])
+def test_ctrl_c_leaves_no_partial_file(clip, tmp_path, capsys, monkeypatch, name, kept):
+    import app.render
+
+    real, calls = app.render.annotate, []
+
+    def interrupted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(app.render, "annotate", interrupted)
+    status, err = render(capsys, clip / "clip.mp4", clip / "truth.csv", "--out", f"{tmp_path}/{name}")
+    assert status == 130 and "interrupted" in err
+    left = sorted(path.name for path in tmp_path.rglob("*") if path.is_file())
+    assert left == kept
