@@ -20,7 +20,7 @@ from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, detect_blobs
 from tracking.goa import GOAConfig, goa_updown, pass_steps
 from tracking.tracks import Tracks
 
-from .overlay import overlay_frames
+from .render import FalseDetections, TrackLayer, View, annotate_frames, track_legend
 from .progress import progress_bar
 
 
@@ -87,12 +87,19 @@ def track_detections(detections: Detections, config: GOAConfig) -> Tracks:
         return goa_updown(detections.points, config, progress=bar.update)
 
 
-def render_overlay(path: Path, tracks: Tracks, frame_indices: np.ndarray, out: Path, fps: float, trail: int = 10) -> None:
-    """Write an H.264 clip of the input with every track's trail and id drawn over it."""
-    column_of_frame = {int(index): column for column, index in enumerate(frame_indices)}
+def render_overlay(path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10) -> None:
+    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`).
+
+    Detections that no track holds are marked as false detections.
+    """
     with open_frames(path) as source:
+        view = View.of(source.size)
+        layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
+        rows = detections.to_rows()
+        false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
+        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(True))
         with progress_bar(source.frame_count, "rendering") as bar:
-            write_video(out, overlay_frames(iter(source), tracks, column_of_frame, trail), fps, progress=bar)
+            write_video(out, (image for _, image in frames), fps, progress=bar)
 
 
 def prepare_output_folder(folder: Path) -> None:
@@ -122,5 +129,5 @@ def run_pipeline(clip: Path, out: Path, options: BlobOptions, config: GOAConfig)
     write_table(out / "detections.csv", detections.to_rows())
     tracks = track_detections(detections, config)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-    render_overlay(clip, tracks, detections.frame_indices, out / "overlay.mp4", fps)
+    render_overlay(clip, tracks, detections, out / "overlay.mp4", fps)
     return detections, tracks
