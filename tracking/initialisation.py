@@ -126,7 +126,9 @@ def first_links(
         best = np.full(links[step][0].size, missing)
         np.minimum.at(best, link_in, triplet_cost + to_go[link_out])
         to_go = best
-    return head, measurement, to_go / len(triplets)
+    # The mean of costs within phi_max is within phi_max; clipping keeps rounding from pruning
+    # a link whose path cannot be continued at all (e.g. across a frame without points).
+    return head, measurement, np.minimum(to_go / len(triplets), phi_max)
 
 
 def _first_candidates(
