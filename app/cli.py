@@ -13,10 +13,10 @@ from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import correct, demo, evaluate, experiment, review, run, track
+from .commands import correct, demo, detect, evaluate, experiment, review, run, track
 from .errors import UsageError
 
-COMMANDS = (run, demo, evaluate, correct, review, experiment, track)
+COMMANDS = (run, demo, evaluate, correct, review, experiment, track, detect)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

@@ -121,6 +121,41 @@ def choose_polarity(gray: np.ndarray, background: np.ndarray, roi: np.ndarray | 
     return "dark" if mass["dark"] >= mass["light"] else "light"
 
 
+def contrast(gray: np.ndarray, options: BlobOptions, background: np.ndarray | None = None, roi: np.ndarray | None = None) -> np.ndarray:
+    """How far each pixel lies on the objects' side of the background, grey levels.
+
+    Parameters
+    ----------
+    gray : ndarray of uint8, shape (H, W)
+    options : BlobOptions
+        Polarity and background.
+    background : ndarray of uint8, shape (H, W), optional
+        The background image when ``options.background`` is "temporal".
+    roi : ndarray of uint8, shape (H, W), optional
+        Contrast is zero where it is zero.
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W)
+    """
+    if roi is not None and roi.shape != gray.shape:
+        raise ValueError(f"region of interest is {roi.shape[1]}x{roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
+    base = background_of(gray, options, background)
+    polarity = options.polarity if options.polarity != "auto" else choose_polarity(gray, base, roi)
+    # uint8 (saturating) so that whole-frame passes stay cheap.
+    signal = cv2.subtract(base, gray) if polarity == "dark" else cv2.subtract(gray, base)
+    if roi is not None:
+        signal = cv2.bitwise_and(signal, signal, mask=roi)
+    return signal
+
+
+def eccentricity(sxx: np.ndarray, syy: np.ndarray, sxy: np.ndarray) -> np.ndarray:
+    """Eccentricity of the ellipses with second central moments sxx, syy, sxy (0 for a circle)."""
+    half_gap = np.sqrt(((sxx - syy) / 2) ** 2 + sxy**2)
+    major, minor = (sxx + syy) / 2 + half_gap, np.maximum((sxx + syy) / 2 - half_gap, 0)
+    return np.sqrt(1 - np.divide(minor, major, out=np.ones_like(major), where=major > 0))
+
+
 def detect_blobs(
     image: np.ndarray,
     options: BlobOptions = BlobOptions(),
@@ -151,15 +186,7 @@ def detect_blobs(
         the frame holds no blob.
     """
     gray = to_gray(image)
-    if roi is not None and roi.shape != gray.shape:
-        raise ValueError(f"region of interest is {roi.shape[1]}x{roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
-    base = background_of(gray, options, background)
-    polarity = options.polarity if options.polarity != "auto" else choose_polarity(gray, base, roi)
-    # Contrast: how far each pixel is on the object side of the background, in uint8 so that
-    # whole-frame passes stay cheap.
-    signal = cv2.subtract(base, gray) if polarity == "dark" else cv2.subtract(gray, base)
-    if roi is not None:
-        signal = cv2.bitwise_and(signal, signal, mask=roi)
+    signal = contrast(gray, options, background, roi)
     level = _level(signal, options.threshold, options.background_size, roi)
     mask = np.greater(signal, level) if np.ndim(level) else cv2.threshold(signal, level, 1, cv2.THRESH_BINARY)[1].view(bool)
     inside = np.flatnonzero(mask)
@@ -219,10 +246,7 @@ def _measure(
     sxx = total(columns * columns.astype(float)) / area - cx * cx
     syy = total(rows * rows.astype(float)) / area - cy * cy
     sxy = total(columns * rows.astype(float)) / area - cx * cy
-    half_gap = np.sqrt(((sxx - syy) / 2) ** 2 + sxy**2)
-    major, minor = (sxx + syy) / 2 + half_gap, np.maximum((sxx + syy) / 2 - half_gap, 0)
-    eccentricity = np.sqrt(1 - np.divide(minor, major, out=np.ones_like(major), where=major > 0))
-    table = {"x": x, "y": y, "area": area, "mean_intensity": intensity, "eccentricity": eccentricity}
+    table = {"x": x, "y": y, "area": area, "mean_intensity": intensity, "eccentricity": eccentricity(sxx, syy, sxy)}
     order = np.lexsort((table["x"], table["y"]))
     return {name: values[order] for name, values in table.items()}
 
