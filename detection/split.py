@@ -13,13 +13,13 @@ import cv2
 import numpy as np
 
 # A blob this many times the typical area may hold several objects.
-_CANDIDATE_AREA_RATIO = 1.6
+_CANDIDATE_AREA_RATIO = 1.3
 # Blobs above this many typical areas are clutter (a rim, a smear), not worth splitting.
 _LARGEST_RATIO = 12.0
 # Blobs needed in a frame before their median area is trusted as the typical object.
 _FEW_BLOBS = 5
 # Summits are where the landscape exceeds this fraction of the blob's highest point.
-_SUMMIT_LEVEL = 0.5
+_SUMMIT_LEVEL = 0.3
 # Single objects are of one size when the quartiles of blob area differ by less than this ratio.
 _UNIFORM_SPREAD = 1.5
 # Most objects a blob is divided among by area.
