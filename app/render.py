@@ -273,19 +273,29 @@ class TrackLayer:
             _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style)
 
 
-def _draw_faded(canvas, points, group, colours, alpha, thick, line) -> None:
+def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
     """Draw links whose opacity is ``alpha`` (0-255), blending only the pixels they touch.
 
+    ``points`` are the (K, 2, 2) fixed-point link ends, ``group`` each link's row in ``palette``
+    (BGR), ``thick`` the links drawn twice as wide (warnings), ``line`` the width in pixels.
     The colour layer is drawn wider and without anti-aliasing so that it covers every pixel the
     anti-aliased alpha layer reaches; the alpha layer alone carries the smooth edges.
     """
     paint, opacity = _scratch(canvas.shape)
+    try:
+        _blend_links(canvas, paint, opacity, points, group, palette, alpha, thick, line)
+    finally:
+        paint.fill(0)
+        opacity.fill(0)
+
+
+def _blend_links(canvas, paint, opacity, points, group, palette, alpha, thick, line) -> None:
     widths = np.where(thick, 2 * line + 1, line)
     for index in np.unique(group):
         chosen = group == index
         for size in np.unique(widths[chosen]):
             picked = chosen & (widths == size)
-            cv2.polylines(paint, points[picked], False, tuple(int(c) for c in colours[index]), int(size) + 4, cv2.LINE_8, SHIFT)
+            cv2.polylines(paint, points[picked], False, tuple(int(c) for c in palette[index]), int(size) + 4, cv2.LINE_8, SHIFT)
     # Oldest first, warnings last, so that newer links and warnings lie on top.
     order = np.lexsort((alpha, thick))
     keys = np.stack([thick[order], alpha[order], widths[order]], axis=1)
@@ -307,8 +317,6 @@ def _draw_faded(canvas, points, group, colours, alpha, thick, line) -> None:
     # for every v below 65536, without a division.
     mixed = under * (255 - weight) + over * weight + 127
     pixels.put(flat, _as_pixels(((mixed + 1 + (mixed >> 8)) >> 8).astype(np.uint8)))
-    paint.fill(0)
-    opacity.fill(0)
 
 
 def _as_pixels(image: np.ndarray) -> np.ndarray:
@@ -341,12 +349,14 @@ def _draw_heads(canvas, xy: np.ndarray, colours: list, hollow: np.ndarray, style
             cv2.circle(canvas, centre, radius, colour, -1, cv2.LINE_AA, SHIFT)
 
 
-def _draw_marker(canvas, xy, colour, kind: int, style: Style) -> None:
+def _draw_marker(canvas, xy, colour, kind: int, style: Style, size: float = 1.6) -> None:
+    """A marker ``size`` times the style's marker size, on a black halo."""
     if np.isnan(xy[0]):
         return
     at = (int(round(xy[0])), int(round(xy[1])))
-    cv2.drawMarker(canvas, at, _HALO, kind, style.marker * 2, style.line + 2, cv2.LINE_AA)
-    cv2.drawMarker(canvas, at, colour, kind, style.marker * 2, style.line, cv2.LINE_AA)
+    pixels = int(round(style.marker * size))
+    cv2.drawMarker(canvas, at, _HALO, kind, pixels, style.line + 2, cv2.LINE_AA)
+    cv2.drawMarker(canvas, at, colour, kind, pixels, style.line, cv2.LINE_AA)
 
 
 def _draw_labels(canvas, texts: list[str], xy: np.ndarray, colours: list, style: Style) -> None:
@@ -403,7 +413,8 @@ class FalseDetections:
         """Mark the false detections of frame ``frame_index`` with a cross, in place."""
         low, high = np.searchsorted(self.frames, [frame_index, frame_index + 1])
         for xy in self.xy[low:high]:
-            _draw_marker(canvas, xy, _NEUTRAL, cv2.MARKER_TILTED_CROSS, style)
+            # Smaller than the track marks: false detections may be many.
+            _draw_marker(canvas, xy, _NEUTRAL, cv2.MARKER_TILTED_CROSS, style, size=0.8)
 
 
 # A legend entry: symbol ("dot", "ring", "start", "end", "cross" or "line"), BGR colour, text.
