@@ -26,7 +26,7 @@ from tracking.goa import GOAConfig, goa_updown, pass_steps
 from tracking.tracks import Tracks
 
 from .errors import UsageError
-from .overlay import overlay_frames
+from .render import FalseDetections, TrackLayer, View, annotate_frames, track_legend
 from .progress import progress_bar
 
 DETECTORS = {"blob": detect_blobs, "log": detect_spots}
@@ -192,15 +192,22 @@ def track_detections(detections: Detections, config: GOAConfig) -> Tracks:
 
 
 def render_overlay(
-    path: Path, tracks: Tracks, frame_indices: np.ndarray, out: Path, fps: float, trail: int = 10, frames: DetectionSettings | None = None
+    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
 ) -> None:
-    """Write an H.264 clip of the input with every track's trail and id drawn over it
-    (only the frames ``frames.start``, ``end`` and ``step`` select, if given)."""
-    column_of_frame = {int(index): column for column, index in enumerate(frame_indices)}
-    span = {} if frames is None else {"start": frames.start, "end": frames.end, "step": frames.step}
+    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`),
+    of the frames ``selection.start``, ``end`` and ``step`` select, if given.
+
+    Detections that no track holds are marked as false detections.
+    """
+    span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
+        view = View.of(source.size)
+        layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
+        rows = detections.to_rows()
+        false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
+        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(True))
         with progress_bar(source.frame_count, "rendering") as bar:
-            write_video(out, overlay_frames(iter(source), tracks, column_of_frame, trail), fps, progress=bar)
+            write_video(out, (image for _, image in frames), fps, progress=bar)
 
 
 def prepare_output_folder(folder: Path) -> None:
@@ -231,5 +238,5 @@ def run_pipeline(clip: Path, out: Path, settings: DetectionSettings, config: GOA
     write_table(out / "detections.csv", detections.to_rows())
     tracks = track_detections(detections, config)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-    render_overlay(clip, tracks, detections.frame_indices, out / "overlay.mp4", found.fps, frames=settings)
+    render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
     return detections, tracks

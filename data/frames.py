@@ -40,6 +40,8 @@ class FrameSource:
         Frames per second (from the video; 25.0 for images).
     frame_count : int or None
         Number of frames iteration will yield if the source is intact; None if unknown.
+    clip_length : int or None
+        Frames in the whole clip if the source vouches for the count (not an estimate), else None.
     size : tuple of int
         (width, height) in pixels.
     stopped_early : str or None
@@ -59,6 +61,7 @@ class FrameSource:
         self.fps = reader.fps
         self.size = reader.size
         self.frame_count = _count(start, end, step, reader.length)
+        self.clip_length = reader.length if reader.exact else None
         self.stopped_early: str | None = None
 
     def __iter__(self) -> Iterator[Frame]:

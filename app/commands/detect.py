@@ -20,7 +20,7 @@ from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from detection.roi import Circle
 
 from ..errors import UsageError
-from ..overlay import SHIFT, _fixed
+from ..render import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
 
@@ -151,7 +151,7 @@ def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndar
 
     def at(points: np.ndarray) -> np.ndarray:
         # Pixel centres sit at integer coordinates: pixel c covers [c - 0.5, c + 0.5).
-        return _fixed((points + 0.5) * zoom - 0.5)
+        return to_fixed((points + 0.5) * zoom - 0.5)
 
     if circle is not None:
         centre = at(np.array([circle.x, circle.y]))
@@ -163,9 +163,7 @@ def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndar
     radii = np.round((np.sqrt(columns["area"] / np.pi) + 1.5) * zoom * (1 << SHIFT)).astype(int)
     for (x, y), r in zip(centres, radii):
         cv2.circle(page, (int(x), int(y)), int(r), _FOUND_BGR, 1, cv2.LINE_AA, SHIFT)
-    text = f"frame {frame_index}: {len(columns['x'])} found"
-    for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):
-        cv2.putText(page, text, (8, 24), cv2.FONT_HERSHEY_SIMPLEX, 0.7, colour, width, cv2.LINE_AA)
+    draw_text(page, f"frame {frame_index}: {len(columns['x'])} found", (8, 24), (255, 255, 255), 0.7, 1)
     return page
 
 
