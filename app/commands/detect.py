@@ -200,7 +200,10 @@ def run(args: argparse.Namespace) -> int:
     rows = found.detections.to_rows()
     write_table(args.out, rows)
     frames = len(found.detections.frame_indices)
-    message = f"{frames} frames, {len(rows['frame'])} detections ({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
+    message = (
+        f"{frames} frames ({found.fps:.4g} frames/s), {len(rows['frame'])} detections "
+        f"({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
+    )
     if args.preview is not None:
         if found.preview is None:
             message += f"; no preview: frame {preview_frame} was not read"
