@@ -192,14 +192,14 @@ def track_detections(detections: Detections, config: GOAConfig) -> Tracks:
 
 
 def render_overlay(
-    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, settings: DetectionSettings | None = None
+    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
 ) -> None:
-    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`).
+    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`),
+    of the frames ``selection.start``, ``end`` and ``step`` select, if given.
 
-    Only the frames that ``settings.start``, ``end`` and ``step`` select are drawn, if given.
     Detections that no track holds are marked as false detections.
     """
-    span = {} if settings is None else {"start": settings.start, "end": settings.end, "step": settings.step}
+    span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
         view = View.of(source.size)
         layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
@@ -238,5 +238,5 @@ def run_pipeline(clip: Path, out: Path, settings: DetectionSettings, config: GOA
     write_table(out / "detections.csv", detections.to_rows())
     tracks = track_detections(detections, config)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-    render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, settings=settings)
+    render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
     return detections, tracks

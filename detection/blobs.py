@@ -104,7 +104,7 @@ def background_of(gray: np.ndarray, options: BlobOptions, background: np.ndarray
 
 
 def choose_polarity(gray: np.ndarray, background: np.ndarray, roi: np.ndarray | None = None) -> str:
-    """"dark" or "light": the side whose contrast beyond the noise floor weighs more.
+    """The polarity, "dark" or "light", whose contrast beyond the noise floor weighs more.
 
     Parameters
     ----------

@@ -166,22 +166,25 @@ def _ellipse_clusters(xy: np.ndarray, weight: np.ndarray, objects: int) -> np.nd
     ndarray of int, shape (n,)
         Object 0..objects-1 of each pixel.
     """
+    x, y = xy[:, 0], xy[:, 1]
     centred = xy - np.average(xy, axis=0, weights=weight)
     _, vectors = np.linalg.eigh(np.cov(centred.T, aweights=weight))
     along = centred @ vectors[:, -1]
     ranks = np.argsort(np.argsort(along, kind="stable"), kind="stable")
     group = ranks * objects // len(along)
     for _ in range(_EM_STEPS):
-        cost = np.empty((len(xy), objects))
-        for k in range(objects):
-            mine = group == k
-            if weight[mine].sum() <= 0:
-                return group
-            mean = np.average(xy[mine], axis=0, weights=weight[mine])
-            d = xy - mean
-            # A pixel is a unit square: its own spread (1/12) keeps the covariance proper.
-            cov = np.cov(d[mine].T, aweights=weight[mine], bias=True) + np.eye(2) / 12
-            cost[:, k] = np.einsum("ij,jk,ik->i", d, np.linalg.inv(cov), d) + np.log(np.linalg.det(cov))
+        mass = np.bincount(group, weight, objects)
+        if (mass <= 0).any():
+            break
+        mx, my = np.bincount(group, weight * x, objects) / mass, np.bincount(group, weight * y, objects) / mass
+        own_x, own_y = x - mx[group], y - my[group]
+        # A pixel is a unit square: its own spread (1/12) keeps each covariance proper.
+        sxx = np.bincount(group, weight * own_x * own_x, objects) / mass + 1 / 12
+        syy = np.bincount(group, weight * own_y * own_y, objects) / mass + 1 / 12
+        sxy = np.bincount(group, weight * own_x * own_y, objects) / mass
+        det = sxx * syy - sxy * sxy
+        dx, dy = x[:, None] - mx, y[:, None] - my
+        cost = (syy * dx * dx - 2 * sxy * dx * dy + sxx * dy * dy) / det + np.log(det)
         new = np.argmin(cost, axis=1)
         if np.array_equal(new, group):
             break

@@ -1,10 +1,11 @@
+import cv2
 import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
 from data.dish import DishSpec, make_dish_scene
 from detection.blobs import BlobOptions, choose_polarity, detect_blobs, to_gray
-from detection.roi import dish_mask
+from detection.roi import dish_mask, find_dish
 from detection.spots import detect_spots
 from tracking.metrics import match_frame
 
@@ -153,3 +154,19 @@ def test_log_detector_finds_small_bright_spots_to_a_tenth_of_a_pixel():
     table = detect_spots(np.clip(image, 0, 255).astype(np.uint8))
     assert len(table["x"]) == len(truth)
     assert nearest_errors(table["x"], table["y"], truth).max() < 0.1
+
+
+def test_dish_is_found_only_when_the_frame_clearly_shows_one():
+    scene = make_dish_scene(DishSpec(frames=1, rim=True, illumination=60))
+    dish = find_dish(to_gray(scene.render(0)))
+    assert dish is not None
+    assert np.hypot(dish.x - scene.centre[0], dish.y - scene.centre[1]) < 0.5 and abs(dish.r - scene.radius) < 1.5
+    rng = np.random.default_rng(0)
+    light_field = np.clip(rng.normal(180, 20, (240, 320)), 0, 255).astype(np.uint8)
+    cut_disc = np.full((240, 320), 40, np.uint8)
+    cv2.circle(cut_disc, (300, 120), 100, 220, -1)  # runs off the frame
+    square = np.full((240, 320), 40, np.uint8)
+    square[40:200, 80:240] = 220
+    for image in (light_field, cut_disc, square):
+        assert find_dish(image) is None
+        assert dish_mask(image) == (None, None)

@@ -20,7 +20,7 @@ from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from detection.roi import Circle
 
 from ..errors import UsageError
-from ..render import SHIFT, to_fixed
+from ..render import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
 
@@ -163,9 +163,7 @@ def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndar
     radii = np.round((np.sqrt(columns["area"] / np.pi) + 1.5) * zoom * (1 << SHIFT)).astype(int)
     for (x, y), r in zip(centres, radii):
         cv2.circle(page, (int(x), int(y)), int(r), _FOUND_BGR, 1, cv2.LINE_AA, SHIFT)
-    text = f"frame {frame_index}: {len(columns['x'])} found"
-    for colour, width in (((0, 0, 0), 4), ((255, 255, 255), 1)):
-        cv2.putText(page, text, (8, 24), cv2.FONT_HERSHEY_SIMPLEX, 0.7, colour, width, cv2.LINE_AA)
+    draw_text(page, f"frame {frame_index}: {len(columns['x'])} found", (8, 24), (255, 255, 255), 0.7, 1)
     return page
 
 
@@ -202,7 +200,10 @@ def run(args: argparse.Namespace) -> int:
     rows = found.detections.to_rows()
     write_table(args.out, rows)
     frames = len(found.detections.frame_indices)
-    message = f"{frames} frames, {len(rows['frame'])} detections ({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
+    message = (
+        f"{frames} frames ({found.fps:.4g} frames/s), {len(rows['frame'])} detections "
+        f"({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
+    )
     if args.preview is not None:
         if found.preview is None:
             message += f"; no preview: frame {preview_frame} was not read"
