@@ -7,18 +7,21 @@ Every subcommand lives in ``app.commands`` as a module with ``add_parser(subpars
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import compare, correct, demo, evaluate, experiment, render, review, run
+from .commands import compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
 from .errors import UsageError
 
-COMMANDS = (run, demo, render, compare, evaluate, correct, review, experiment)
+COMMANDS = (run, demo, detect, track, render, compare, evaluate, correct, review, synth, experiment)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+# What a shell reports for a command killed by SIGPIPE (128 + 13).
+EXIT_BROKEN_PIPE = 141
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -35,8 +38,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``seedtrack`` with the given arguments; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        return _run(build_parser().parse_args(argv))
+    except BrokenPipeError:
+        # The reader (e.g. `| head`) has gone; files are written before anything is printed, and
+        # pointing stdout at devnull keeps Python's exit-time flush from raising a second time.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return args.run(args)
     except (DataError, UsageError) as error:

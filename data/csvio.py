@@ -59,6 +59,7 @@ def read_table(
     path: str | os.PathLike,
     required: tuple[str, ...] = (),
     integer: tuple[str, ...] = ("frame", "track_id", "interpolated"),
+    others_as_text: bool = False,
 ) -> dict[str, np.ndarray]:
     """Read a CSV table with a header row into numeric columns.
 
@@ -71,6 +72,9 @@ def read_table(
     integer : tuple of str
         Columns parsed as integers where present; every other column is parsed as float when
         all its values are numbers, and kept as text otherwise.
+    others_as_text : bool
+        Keep every column that is neither required nor integer as text, exactly as written,
+        so that it can be copied to another file unchanged.
 
     Returns
     -------
@@ -101,6 +105,9 @@ def read_table(
     table: dict[str, np.ndarray] = {}
     for position, name in enumerate(header):
         texts = [row[position].strip() for row in body]
+        if others_as_text and name not in required and name not in integer:
+            table[name] = np.array(texts, dtype=object)
+            continue
         table[name] = _parse_column(path, name, texts, name in required, name in integer)
     return table
 

@@ -98,3 +98,17 @@ def _write(path, content):
 def _folder(path):
     path.mkdir()
     return path
+
+
+def test_output_piped_into_a_closed_reader_is_not_a_traceback(tmp_path):
+    tracks = _write(tmp_path / "tracks.csv", b"track_id,frame,x,y,interpolated\n0,0,1,1,0\n0,1,2,2,0\n1,0,9,9,0\n1,1,8,8,0\n")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "app", "evaluate", tracks, "--truth", tracks],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    process.stdout.close()  # the reader is gone before the table is printed, as with `| head -0`
+    stderr = process.stderr.read()
+    assert process.wait() == 141
+    assert "Traceback" not in stderr

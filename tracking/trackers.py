@@ -16,11 +16,7 @@ from .ipan import IPANConfig, ipan
 from .nn import nearest_neighbour
 from .rs import rangarajan_shah
 from .ss import sethi_jain
-from .tracks import Tracks
-
-# An estimated speed limit leaves this much room above the fastest links GOA-updown makes.
-_SPEED_MARGIN = 1.5
-_SPEED_PERCENTILE = 99
+from .tracks import Tracks, link_speed_limit
 
 
 @dataclass(frozen=True)
@@ -53,11 +49,7 @@ def estimate_speed_limit(frames: Sequence[np.ndarray]) -> float:
     float
         Pixels/frame; 1.0 when there are no links to measure.
     """
-    tracks = goa_updown(frames)
-    measured = tracks.measurement != -1
-    both = measured[:, 1:] & measured[:, :-1]
-    speed = np.hypot(*np.diff(tracks.xy, axis=1)[both].T)
-    return float(_SPEED_MARGIN * np.percentile(speed, _SPEED_PERCENTILE)) if speed.size and speed.max() > 0 else 1.0
+    return link_speed_limit(goa_updown(frames))
 
 
 def _ipan(frames, max_speed, first_frame):

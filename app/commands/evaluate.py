@@ -9,6 +9,7 @@ from pathlib import Path
 
 from data.atomic import atomic_path
 from data.csvio import write_table
+from data.errors import DataError
 from data.trackfile import FORMATS, read_tracks
 from tracking.clear_mot import clear_mot
 from tracking.diagnosis import first_errors
@@ -28,7 +29,10 @@ def add_parser(subparsers) -> None:
         description="Match result points to true points frame by frame (one to one, within --tol, by optimal "
         "assignment) and report the paper's strict track error, relaxed trajectory merit and link error, and "
         "ID switches, fragmentations, MOTA, MOTP and IDF1 as py-motmetrics computes them. With --out, also "
-        "write DIR/evaluation.json, DIR/wrong_tracks.csv and DIR/errors.png.",
+        "write DIR/evaluation.json, DIR/wrong_tracks.csv and DIR/errors.png. A result with no tracks (a header "
+        "only) scores as every true track missed. TRUTH must hold points in at least two frames, since the "
+        "track and link errors are about links; otherwise, and for a missing column or a value that is not a "
+        "finite number in either file, the exit status is 2.",
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="result tracks (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
     parser.add_argument("--truth", type=Path, required=True, metavar="TRUTH", help="true tracks, in any of the same formats")
@@ -53,6 +57,10 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
     """
     result = read_tracks(tracks_path, tracks_format)
     truth = read_tracks(truth_path, truth_format)
+    if truth.n_tracks == 0:
+        raise DataError(truth_path, "holds no true tracks; there is nothing to score against")
+    if truth.n_frames < 2:
+        raise DataError(truth_path, f"holds a single frame ({truth.first_frame}); scoring links needs at least two")
     paper = score_tracks(result, truth, tolerance)
     clear = clear_mot(result, truth, tolerance)
     measures = {

@@ -1,0 +1,213 @@
+"""``seedtrack track POINTS.csv --out tracks.csv``: link measured points into tracks."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from data.csvio import TRACK_COLUMNS, read_table, write_table
+from data.errors import DataError
+from tracking.goa import GOAConfig, goa, goa_updown, initial_links, pass_steps
+from tracking.motion import CombinedModel, IndividualModel
+from tracking.trackers import TRACKERS, run_tracker
+from tracking.tracks import Tracks
+
+from ..errors import UsageError
+from ..progress import progress_bar
+from .run import add_tracker_options
+
+POINT_COLUMNS = ("frame", "x", "y")
+FIRST_LINKS = {"lookahead": "lookahead", "nearest": "im1"}
+# Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
+_GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links")
+
+DESCRIPTION = """\
+Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any other columns are
+kept) into tracks and write tracks.csv with columns track_id,frame,x,y,interpolated followed by the
+kept columns. A measured row carries its point's kept values unchanged; a row with interpolated=1 is
+a position filled in for a missed point (a bound slave) and leaves them blank. Input columns named
+track_id or interpolated are not kept.
+
+Frame numbers are the input's. A frame number missing between the first and the last is a frame in
+which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
+rows. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
+
+Algorithms: goa-updown (default) initialises itself, tracks forwards, then backwards from the
+forward pass's last links. goa is the paper's single forward pass from given first links; here they
+are the links between the first two frames that --first-links chooses. Both keep one track per point
+of the first frame. nn, ss, rs and ipan are the paper's comparison trackers; they start and end
+tracks anywhere and take only --max-speed.
+
+Without --max-speed there is no speed limit: the smoothness limit --phi-max bounds a moving point
+and the first links are chosen among each point's nearest neighbours, which suits data whose speed
+you do not know.
+
+POINTS.csv must hold at least two frames; a file with only a header, a single frame, a missing
+column, or a value that is not a finite number is an error (exit 2, nothing written)."""
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "track",
+        help="link measured points (frame,x,y) into tracks",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
+    parser.add_argument("--out", type=Path, required=True, metavar="TRACKS.csv", help="output tracks (CSV)")
+    parser.add_argument(
+        "--algorithm",
+        choices=("goa", *TRACKERS),
+        default="goa-updown",
+        help="tracker (default goa-updown)",
+    )
+    add_tracker_options(parser)
+    group = parser.add_argument_group("GOA and GOA-updown only")
+    group.add_argument(
+        "--individual-model",
+        choices=("im1", "im2", "im3"),
+        default=None,
+        help="cost of one link: im1 nearest neighbour, im2 smooth motion (default), im3 proximal uniformity",
+    )
+    group.add_argument(
+        "--combined-model",
+        choices=("cm1", "cm2"),
+        default=None,
+        help="how link costs add up in a frame: cm1 sum (default), cm2 conditioned on competitors",
+    )
+    group.add_argument("--min-speed", type=float, default=None, metavar="PX", help="smallest speed, pixels/frame (default 0)")
+    group.add_argument(
+        "--first-links",
+        choices=tuple(FIRST_LINKS),
+        default=None,
+        help="first links (frames 1-2): lookahead (default) scores each by the smoothest path it starts over "
+        "the next five frames; nearest is the paper's optimal nearest-neighbour assignment",
+    )
+    # phi_max left unset tells a GOA option given to another tracker from one left at its default.
+    parser.set_defaults(run=run, phi_max=None)
+
+
+@dataclass(frozen=True)
+class Points:
+    """Measured points grouped by frame.
+
+    Attributes
+    ----------
+    frames : list of ndarray, each (M_k, 2)
+        Positions (x, y), pixels, of frame ``first_frame + k``, sorted by x then y.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    order : ndarray of int
+        0-based data row of POINTS.csv of each point, frame after frame.
+    offset : ndarray of int
+        Position in ``order`` of each frame's first point.
+    kept : dict of str to ndarray
+        The input's other columns, as text, one entry per data row.
+    """
+
+    frames: list[np.ndarray]
+    first_frame: int
+    order: np.ndarray
+    offset: np.ndarray
+    kept: dict[str, np.ndarray]
+
+
+def read_points(path: Path) -> Points:
+    """Read POINTS.csv and group its points by frame.
+
+    Raises
+    ------
+    DataError
+        If a column is missing or not numeric, a frame is negative, or fewer than two frames hold points.
+    """
+    table = read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True)
+    frame, x, y = (table[name] for name in POINT_COLUMNS)
+    if frame.size == 0:
+        raise DataError(path, "no points (only a header); tracking needs points in at least two frames")
+    if frame.min() < 0:
+        bad = int(np.argmax(frame < 0))
+        raise DataError(path, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
+    if np.unique(frame).size < 2:
+        raise DataError(path, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
+    # Sorting by position makes the result independent of the order of the rows.
+    order = np.lexsort((y, x, frame))
+    first = int(frame.min())
+    offset = np.concatenate(([0], np.cumsum(np.bincount(frame - first))))
+    xy = np.column_stack((x, y))[order]
+    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
+    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
+    return Points(frames, first, order, offset[:-1], kept)
+
+
+def goa_config(args: argparse.Namespace) -> GOAConfig:
+    """The GOA configuration the options ask for (defaults for options not given)."""
+    options = {
+        "individual": IndividualModel(args.individual_model or "im2"),
+        "combined": CombinedModel(args.combined_model or "cm1"),
+        "d_max": args.max_speed,
+        "initialisation": FIRST_LINKS[args.first_links or "lookahead"],
+    }
+    if args.phi_max is not None:
+        options["phi_max"] = args.phi_max
+    if args.min_speed is not None:
+        options["d_min"] = args.min_speed
+    try:
+        return GOAConfig(**options)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    for option, allow_zero in (("max_speed", False), ("min_speed", True), ("phi_max", False)):
+        value = getattr(args, option)
+        if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
+            kind = "a non-negative" if allow_zero else "a positive"
+            raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
+    if args.algorithm not in ("goa", "goa-updown"):
+        given = [f"--{name.replace('_', '-')}" for name in _GOA_ONLY if getattr(args, name) is not None]
+        if given:
+            raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
+
+
+def track_points(points: Points, args: argparse.Namespace) -> Tracks:
+    """Run the tracker the options name on the points, with a progress bar for GOA."""
+    frames, first = points.frames, points.first_frame
+    if args.algorithm not in ("goa", "goa-updown"):
+        return run_tracker(args.algorithm, frames, args.max_speed, first)
+    config = goa_config(args)
+    if args.algorithm == "goa-updown":
+        with progress_bar(pass_steps(len(frames)), "tracking", unit="step") as bar:
+            return goa_updown(frames, config, first, progress=bar.update)
+    with progress_bar(len(frames) - 2, "tracking", unit="step") as bar:
+        return goa(frames, initial_links(frames, config), config, first, progress=bar.update)
+
+
+def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
+    """The columns of tracks.csv: the track columns, then the kept columns (blank when interpolated)."""
+    rows = tracks.to_rows()
+    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
+    column = rows["frame"] - tracks.first_frame
+    measured = measurement >= 0
+    source = points.order[points.offset[column[measured]] + measurement[measured]]
+    for name, values in points.kept.items():
+        out = np.full(measurement.size, "", dtype=object)
+        out[measured] = values[source]
+        rows[name] = out
+    return rows
+
+
+def run(args: argparse.Namespace) -> int:
+    _check_options(args)
+    points = read_points(args.points)
+    tracks = track_points(points, args)
+    rows = track_rows(points, tracks)
+    write_table(args.out, rows)
+    print(
+        f"{len(points.frames)} frames, {sum(f.shape[0] for f in points.frames)} points, {tracks.n_tracks} tracks, "
+        f"{int(rows['interpolated'].sum())} interpolated positions; wrote {args.out}"
+    )
+    return 0

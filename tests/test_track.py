@@ -1,0 +1,188 @@
+"""End-to-end: ``seedtrack track`` on point files, and its answers to bad input."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from data.csvio import read_table, write_table
+from data.psmg import PSMGSpec, generate_psmg
+from tracking.trackers import TRACKERS
+from tracking.tracks import Tracks
+
+FIRST_FRAME = 7
+
+
+def seedtrack(*args):
+    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """PSMG points starting at frame 7, rows shuffled, with a label column; and their truth."""
+    folder = tmp_path_factory.mktemp("points")
+    frames, truth = generate_psmg(PSMGSpec(trajectories=15, frames=10, occlusion=0.1, random_seed=3))
+    frame = np.concatenate([np.full(len(p), k + FIRST_FRAME) for k, p in enumerate(frames)])
+    xy = np.concatenate(frames)
+    label = np.array([f"m{k}" for k in range(frame.size)], dtype=object)
+    shuffle = np.random.default_rng(0).permutation(frame.size)
+    columns = {"label": label, "frame": frame, "x": xy[:, 0], "y": xy[:, 1]}
+    write_table(folder / "points.csv", {name: values[shuffle] for name, values in columns.items()})
+    write_table(folder / "truth.csv", Tracks(truth.xy, truth.measurement, FIRST_FRAME).to_rows())
+    return folder, columns
+
+
+def test_track_then_evaluate_finds_every_trajectory(scene, tmp_path):
+    folder, columns = scene
+    out = tmp_path / "tracks.csv"
+    result = seedtrack("track", folder / "points.csv", "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert out.read_text().splitlines()[0] == "track_id,frame,x,y,interpolated,label"
+    tracks = read_table(out, required=("track_id", "frame", "x", "y", "interpolated"))
+    assert tracks["frame"].min() == FIRST_FRAME and tracks["frame"].max() == FIRST_FRAME + 9
+    # Each measured row carries its own point's label; interpolated rows carry none.
+    measured = tracks["interpolated"] == 0
+    assert np.all(tracks["label"][~measured] == "")
+    by_label = {label: k for k, label in enumerate(columns["label"])}
+    source = np.array([by_label[label] for label in tracks["label"][measured]])
+    assert np.array_equal(columns["frame"][source], tracks["frame"][measured])
+    assert np.allclose(columns["x"][source], tracks["x"][measured], atol=1e-4)
+    assert sorted(source) == list(range(columns["frame"].size))
+    score = seedtrack("evaluate", out, "--truth", folder / "truth.csv")
+    assert score.returncode == 0, score.stderr
+    assert "track_error      0.000000" in score.stdout and "link_error       0.000000" in score.stdout
+
+
+@pytest.mark.parametrize("algorithm", ["goa", *TRACKERS])
+def test_every_algorithm_writes_tracks_of_the_input_points(scene, tmp_path, algorithm):
+    folder, columns = scene
+    out = tmp_path / "tracks.csv"
+    assert main(["track", str(folder / "points.csv"), "--out", str(out), "--algorithm", algorithm]) == 0
+    tracks = read_table(out)
+    measured = tracks["interpolated"] == 0
+    assert measured.sum() == columns["frame"].size
+    assert set(tracks["label"][measured]) == set(columns["label"])
+
+
+def test_row_order_does_not_change_the_output(scene, tmp_path):
+    folder, columns = scene
+    reversed_rows = {name: values[::-1] for name, values in columns.items()}
+    write_table(tmp_path / "reversed.csv", reversed_rows)
+    outputs = []
+    for name, points in (("a", folder / "points.csv"), ("b", tmp_path / "reversed.csv")):
+        assert main(["track", str(points), "--out", str(tmp_path / f"{name}.csv")]) == 0
+        outputs.append((tmp_path / f"{name}.csv").read_bytes())
+    assert outputs[0] == outputs[1]
+
+
+@pytest.mark.parametrize("algorithm", ["goa", "goa-updown"])
+def test_a_frame_number_without_points_is_bridged(tmp_path, algorithm):
+    # Two points moving steadily; frame 5 is absent from the file (nothing measured there).
+    points = tmp_path / "points.csv"
+    points.write_text("frame,x,y,area\n3,10,10,5\n3,50,50,6\n4,12,10,5\n4,50,53,6\n6,16,10,5\n6,50,59,6\n7,18,10,5\n7,50,62,6\n")
+    out = tmp_path / "tracks.csv"
+    assert main(["track", str(points), "--out", str(out), "--algorithm", algorithm]) == 0
+    tracks = read_table(out)
+    assert list(tracks["frame"]) == [3, 4, 5, 6, 7] * 2
+    assert list(tracks["interpolated"]) == [0, 0, 1, 0, 0] * 2
+    assert np.allclose(tracks["x"][:5], [10, 12, 14, 16, 18]) and np.allclose(tracks["y"][5:], [50, 53, 56, 59, 62])
+    assert list(tracks["area"]) == ["5", "5", "", "5", "5", "6", "6", "", "6", "6"]
+
+
+def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):
+    folder, _ = scene
+    result = seedtrack("track", folder / "points.csv", "--out", tmp_path / "t.csv", "--algorithm", "nn", "--individual-model", "im3")
+    assert result.returncode == 2
+    assert "--individual-model only apply to --algorithm goa or goa-updown" in result.stderr
+    assert not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.parametrize("model", ["--individual-model=im1", "--individual-model=im3", "--combined-model=cm2", "--first-links=nearest"])
+def test_model_options_reach_the_tracker(scene, tmp_path, model):
+    folder, columns = scene
+    out = tmp_path / "tracks.csv"
+    assert main(["track", str(folder / "points.csv"), "--out", str(out), model, "--max-speed", "12"]) == 0
+    tracks = read_table(out)
+    # GOA keeps one track per first-frame point; a point no track takes is left out, none is used twice.
+    labels = tracks["label"][tracks["interpolated"] == 0]
+    assert len(set(labels)) == labels.size and set(labels) <= set(columns["label"])
+    assert len(set(tracks["track_id"])) == (columns["frame"] == FIRST_FRAME).sum()
+
+
+def _one_line_exit_2(capsys, argv, message):
+    # In process for speed; test_track_goa_options_are_refused_by_other_trackers runs the real command.
+    assert main(list(map(str, argv))) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and message in error, error
+
+
+GOOD_POINTS = "frame,x,y\n0,1,1\n1,2,1\n"
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("frame,x\n0,1\n1,2\n", "points.csv: missing column(s) y"),
+        ("frame,x,y\n0,1,1\n1,abc,1\n", "points.csv: line 3: column x holds 'abc', not a number"),
+        ("frame,x,y\n0,1,1\n1,2,nan\n", "points.csv: line 3: column y holds 'nan', not a finite number"),
+        ("frame,x,y\n0,1,1\n1.5,2,1\n", "points.csv: line 3: column frame holds '1.5', not a whole number"),
+        ("frame,x,y\n0,1,1\n-1,2,1\n", "points.csv: line 3: frame -1 is negative"),
+        ("frame,x,y\n", "points.csv: no points (only a header)"),
+        ("", "points.csv: the file is empty"),
+        ("frame,x,y\n4,1,1\n4,2,1\n", "points.csv: all points are in frame 4; tracking needs points in at least two frames"),
+    ],
+)
+def test_track_bad_points_is_one_line_exit_2_nothing_written(tmp_path, capsys, text, message):
+    (tmp_path / "points.csv").write_text(text)
+    _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path / "tracks.csv"], message)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--max-speed", "0"], "--max-speed must be a positive finite number, got 0"),
+        (["--max-speed", "-3"], "--max-speed must be a positive finite number, got -3"),
+        (["--max-speed", "nan"], "--max-speed must be a positive finite number, got nan"),
+        (["--phi-max", "0"], "--phi-max must be a positive finite number, got 0"),
+        (["--min-speed", "-1"], "--min-speed must be a non-negative finite number, got -1"),
+        (["--min-speed", "5", "--max-speed", "3"], "d_min must be non-negative and below d_max"),
+        (["--algorithm", "ss", "--max-speed", "-1"], "--max-speed must be a positive finite number, got -1"),
+    ],
+)
+def test_track_bad_limits_are_one_line_exit_2_nothing_written(tmp_path, capsys, options, message):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS)
+    _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path / "tracks.csv", *options], message)
+    assert not (tmp_path / "tracks.csv").exists()
+
+
+TRUTH = "track_id,frame,x,y\n0,0,1,1\n0,1,2,1\n"
+
+
+@pytest.mark.parametrize(
+    "tracks, truth, message",
+    [
+        ("track_id,frame,x\n0,0,1\n", TRUTH, "tracks.csv: line 1: a track CSV needs columns track_id,frame,x,y"),
+        ("track_id,frame,x,y\n0,0,1,one\n", TRUTH, "tracks.csv: line 2: column y holds 'one', not a number"),
+        ("track_id,frame,x,y\n0,0,nan,1\n", TRUTH, "tracks.csv: line 2: column x holds 'nan', not a finite number"),
+        ("", TRUTH, "tracks.csv: line 1: a track CSV needs columns"),
+        (TRUTH, "track_id,frame,x,y\n", "truth.csv: holds no true tracks"),
+        (TRUTH, "track_id,frame,x,y\n0,3,1,1\n1,3,5,5\n", "truth.csv: holds a single frame (3)"),
+    ],
+)
+def test_evaluate_bad_files_are_one_line_exit_2_nothing_written(tmp_path, capsys, tracks, truth, message):
+    (tmp_path / "tracks.csv").write_text(tracks)
+    (tmp_path / "truth.csv").write_text(truth)
+    argv = ["evaluate", tmp_path / "tracks.csv", "--truth", tmp_path / "truth.csv", "--out", tmp_path / "out"]
+    _one_line_exit_2(capsys, argv, message)
+    assert not (tmp_path / "out").exists()
+
+
+def test_evaluate_scores_a_single_frame_result(tmp_path, capsys):
+    (tmp_path / "tracks.csv").write_text("track_id,frame,x,y\n5,0,1,1\n")
+    (tmp_path / "truth.csv").write_text(TRUTH)
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 0
+    table = capsys.readouterr().out
+    assert "track_error      1.000000" in table and "link_error       1.000000" in table
