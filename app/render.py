@@ -238,9 +238,9 @@ class TrackLayer:
         # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
         self._draw_marks(canvas, column - self.trail, column, style)
         present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
-        colours = [self._colours[index] for index in self.colour_index[present]]
-        _draw_heads(canvas, self.xy[present, column], colours, self.hollow[present, column], style)
+        _draw_heads(canvas, self.xy[present, column], self.colour_index[present], self._colours, self.hollow[present, column], style)
         if self.labels:
+            colours = [self._colours[index] for index in self.colour_index[present]]
             _draw_labels(canvas, [self._texts[row] for row in present], self.xy[present, column], colours, style)
 
     def _draw_marks(self, canvas: np.ndarray, low: int, high: int, style: Style) -> None:
@@ -277,25 +277,25 @@ def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
     """Draw links whose opacity is ``alpha`` (0-255), blending only the pixels they touch.
 
     ``points`` are the (K, 2, 2) fixed-point link ends, ``group`` each link's row in ``palette``
-    (BGR), ``thick`` the links drawn twice as wide (warnings), ``line`` the width in pixels.
-    The colour layer is drawn wider and without anti-aliasing so that it covers every pixel the
-    anti-aliased alpha layer reaches; the alpha layer alone carries the smooth edges.
+    (BGR, at most 255 rows), ``thick`` the links drawn twice as wide (warnings), ``line`` the
+    width in pixels. Links are drawn twice into single-channel layers: which palette colour (drawn
+    wider, without anti-aliasing, so that it covers every pixel the other reaches) and how opaque
+    (anti-aliased, so it alone carries the smooth edges).
     """
-    paint, opacity = _scratch(canvas.shape)
+    inks, opacity = _scratch(canvas.shape[:2])
     try:
-        _blend_links(canvas, paint, opacity, points, group, palette, alpha, thick, line)
+        _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line)
     finally:
-        paint.fill(0)
+        inks.fill(0)
         opacity.fill(0)
 
 
-def _blend_links(canvas, paint, opacity, points, group, palette, alpha, thick, line) -> None:
+def _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line) -> None:
     widths = np.where(thick, 2 * line + 1, line)
-    for index in np.unique(group):
-        chosen = group == index
-        for size in np.unique(widths[chosen]):
-            picked = chosen & (widths == size)
-            cv2.polylines(paint, points[picked], False, tuple(int(c) for c in palette[index]), int(size) + 4, cv2.LINE_8, SHIFT)
+    # Warnings (thick) last, so that they lie on top.
+    for index, size in sorted({(int(g), int(w)) for g, w in zip(group, widths)}, key=lambda key: (key[1] > line, key)):
+        picked = (group == index) & (widths == size)
+        cv2.polylines(inks, points[picked], False, index + 1, size + 4, cv2.LINE_8, SHIFT)
     # Oldest first, warnings last, so that newer links and warnings lie on top.
     order = np.lexsort((alpha, thick))
     keys = np.stack([thick[order], alpha[order], widths[order]], axis=1)
@@ -308,45 +308,48 @@ def _blend_links(canvas, paint, opacity, points, group, palette, alpha, thick, l
     xs, ys = found.reshape(-1, 2).T
     flat = ys.astype(np.intp) * canvas.shape[1] + xs
     weight = opacity.reshape(-1).take(flat).astype(np.uint16)[:, None]
+    # Index 0 (no ink) takes black, as a pixel outside the colour layer would.
+    over = np.vstack([[0, 0, 0], palette]).astype(np.uint16).take(inks.reshape(-1).take(flat), axis=0)
     # Pixels viewed as 3-byte items: gathering and scattering whole pixels is several times
     # faster than indexing rows of a (pixels, 3) array.
-    pixels, colours = (_as_pixels(image) for image in (canvas, paint))
+    pixels = canvas.reshape(-1, 3).view("V3").reshape(-1)
     under = pixels.take(flat).view(np.uint8).reshape(-1, 3)
-    over = colours.take(flat).view(np.uint8).reshape(-1, 3)
     # Integer blending, rounded, so the same on every machine; (v + 1 + (v >> 8)) >> 8 is v // 255
     # for every v below 65536, without a division.
     mixed = under * (255 - weight) + over * weight + 127
-    pixels.put(flat, _as_pixels(((mixed + 1 + (mixed >> 8)) >> 8).astype(np.uint8)))
-
-
-def _as_pixels(image: np.ndarray) -> np.ndarray:
-    """A contiguous (..., 3) uint8 array viewed as a flat array of 3-byte pixels (no copy)."""
-    return image.reshape(-1, 3).view("V3").reshape(-1)
+    blended = ((mixed + 1 + (mixed >> 8)) >> 8).astype(np.uint8)
+    pixels.put(flat, blended.view("V3").reshape(-1))
 
 
 _SCRATCH: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def _scratch(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Zeroed colour and alpha layers of a frame's shape, reused from frame to frame (and left zeroed)."""
+    """Two zeroed uint8 layers of a frame's (height, width), reused from frame to frame (and left zeroed)."""
     if shape not in _SCRATCH:
         _SCRATCH.clear()
-        _SCRATCH[shape] = (np.zeros(shape, np.uint8), np.zeros(shape[:2], np.uint8))
+        _SCRATCH[shape] = (np.zeros(shape, np.uint8), np.zeros(shape, np.uint8))
     return _SCRATCH[shape]
 
 
-def _draw_heads(canvas, xy: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
-    """A disc at each measured position and a ring at each interpolated one, on a black halo."""
-    radius = int(round(style.radius * (1 << SHIFT)))
+def _draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
+    """A disc at each measured position and a ring at each interpolated one, on a black halo.
+
+    ``groups`` holds each head's index into ``colours``. Discs are drawn as zero-length lines
+    (round caps) in one call per colour, which is much faster than a circle per head.
+    """
+    fixed = to_fixed(xy)
+    dots = np.repeat(fixed[~hollow][:, None], 2, axis=1)
+    size = max(3, round(2 * style.radius))
+    cv2.polylines(canvas, dots, False, _HALO, size + 2, cv2.LINE_AA, SHIFT)
+    solid = groups[~hollow]
+    for group in np.unique(solid):
+        cv2.polylines(canvas, dots[solid == group], False, colours[group], size, cv2.LINE_AA, SHIFT)
     # Rings are larger than discs, so that the hole shows even at small sizes.
-    ring = int(round(radius * 1.4))
-    for centre, colour, empty in zip(map(tuple, to_fixed(xy).tolist()), colours, hollow.tolist()):
-        if empty:
-            cv2.circle(canvas, centre, ring, _HALO, style.line + 2, cv2.LINE_AA, SHIFT)
-            cv2.circle(canvas, centre, ring, colour, style.line, cv2.LINE_AA, SHIFT)
-        else:
-            cv2.circle(canvas, centre, radius + (1 << SHIFT), _HALO, -1, cv2.LINE_AA, SHIFT)
-            cv2.circle(canvas, centre, radius, colour, -1, cv2.LINE_AA, SHIFT)
+    ring = int(round(style.radius * 1.4 * (1 << SHIFT)))
+    for centre, group in zip(map(tuple, fixed[hollow].tolist()), groups[hollow].tolist()):
+        cv2.circle(canvas, centre, ring, _HALO, style.line + 2, cv2.LINE_AA, SHIFT)
+        cv2.circle(canvas, centre, ring, colours[group], style.line, cv2.LINE_AA, SHIFT)
 
 
 def _draw_marker(canvas, xy, colour, kind: int, style: Style, size: float = 1.6) -> None:
