@@ -13,10 +13,10 @@ from typing import Sequence
 
 from data.errors import DataError
 
-from .commands import correct, demo, evaluate, experiment, review, run, track
+from .commands import compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
 from .errors import UsageError
 
-COMMANDS = (run, demo, evaluate, correct, review, experiment, track)
+COMMANDS = (run, demo, detect, track, render, compare, evaluate, correct, review, synth, experiment)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

@@ -12,7 +12,7 @@ import numpy as np
 from data.atomic import atomic_path
 from data.errors import DataError
 
-from .overlay import PALETTE_BGR
+from .render import PALETTE_BGR
 
 _WIDTH, _HEIGHT = 960, 420
 _LEFT, _RIGHT, _TOP, _BOTTOM = 70, 20, 50, 60

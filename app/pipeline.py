@@ -6,23 +6,59 @@ clip's length does not bound what can be processed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+import sys
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from data.csvio import write_table
 from data.errors import DataError
-from data.frames import open_frames
+from data.frames import FrameSource, open_frames, read_mask
 from data.trackfile import write_tracks
 from data.video import write_video
-from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, detect_blobs
+from detection.background import temporal_median
+from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
+from detection.roi import Circle, circle_mask, dish_mask
+from detection.spots import detect_spots
 from tracking.goa import GOAConfig, goa_updown, pass_steps
 from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
 from tracking.tracks import Tracks
 
-from .overlay import overlay_frames
+from .errors import UsageError
+from .render import FalseDetections, TrackLayer, View, annotate_frames, track_legend
 from .progress import progress_bar
+
+DETECTORS = {"blob": detect_blobs, "log": detect_spots}
+# Frames whose per-pixel median is a static scene's background: spread over the clip.
+_BACKGROUND_FRAMES = 64
+
+
+@dataclass(frozen=True)
+class DetectionSettings:
+    """What the detector is asked to do on a clip.
+
+    Attributes
+    ----------
+    options : BlobOptions
+        Polarity ("auto" is decided once, on the first frame), background, threshold, areas.
+    detector : {"blob", "log"}
+        Threshold blobs (:func:`detection.blobs.detect_blobs`) or Laplacian-of-Gaussian spots
+        (:func:`detection.spots.detect_spots`).
+    roi : "auto", "none", Circle or Path
+        Region of interest: the dish found on the first frame (whole frame if there is none
+        clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
+    start, end, step : int
+        0-based frames processed: ``range(start, end, step)``, end None for the clip's end.
+    """
+
+    options: BlobOptions = BlobOptions()
+    detector: str = "blob"
+    roi: str | Circle | Path = "auto"
+    start: int = 0
+    end: int | None = None
+    step: int = 1
 
 
 @dataclass(frozen=True)
@@ -55,31 +91,99 @@ class Detections:
         return rows
 
 
-def detect_clip(path: Path, options: BlobOptions) -> tuple[Detections, float]:
-    """Detect blobs in every frame of a clip, with a progress bar.
+@dataclass(frozen=True, eq=False)
+class ClipDetections:
+    """What :func:`detect_clip` found.
 
-    Returns
-    -------
-    Detections
-    float
+    Attributes
+    ----------
+    detections : Detections
+    fps : float
         The clip's frame rate, frames per second.
+    roi : ndarray of uint8, shape (H, W), or None
+        The region of interest used (255 inside), None for the whole frame.
+    circle : Circle or None
+        The dish found or the circle given, when the region is a circle.
+    preview : ndarray of uint8, shape (H, W, 3), or None
+        The frame asked for as a preview, as read.
+    """
+
+    detections: Detections
+    fps: float
+    roi: np.ndarray | None
+    circle: Circle | None
+    preview: np.ndarray | None
+
+
+def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None) -> ClipDetections:
+    """Detect objects in every frame of a clip, with a progress bar.
+
+    A video that breaks off part way keeps the frames decoded before, and one line on standard
+    error says where it stopped.
+
+    Parameters
+    ----------
+    path : Path
+        Video, image folder, glob pattern or TIFF stack.
+    settings : DetectionSettings
+    preview_frame : int, optional
+        0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
 
     Raises
     ------
     DataError
-        If the clip cannot be read or holds no frame.
+        If the clip or the mask cannot be read, the mask is of another size, or no frame can
+        be read.
+    UsageError
+        If the preview frame is not among the processed frames.
     """
-    indices: list[int] = []
-    columns: list[dict[str, np.ndarray]] = []
-    with open_frames(path) as source:
+    with open_frames(path, start=settings.start, end=settings.end, step=settings.step) as source:
+        last = settings.start + settings.step * source.frame_count if source.frame_count is not None else settings.end
+        processed = range(settings.start, last if last is not None else sys.maxsize, settings.step)
+        if preview_frame is not None and preview_frame not in processed:
+            raise UsageError(f"preview frame {preview_frame} is not among the frames processed")
+        roi, circle = _given_roi(settings.roi, source.size)
+        background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
+        detect = DETECTORS[settings.detector]
+        options = settings.options
+        indices: list[int] = []
+        columns: list[dict[str, np.ndarray]] = []
+        preview = None
         with progress_bar(source.frame_count, "detecting") as bar:
             for index, image in source:
+                gray = to_gray(image)
+                if not indices:
+                    if settings.roi == "auto":
+                        roi, circle = dish_mask(gray)
+                    if options.polarity == "auto":
+                        # Once per clip: a frame with little in it must not flip it.
+                        options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
                 indices.append(index)
-                columns.append(detect_blobs(image, options))
+                columns.append(detect(gray, options, background=background, roi=roi))
+                if index == preview_frame:
+                    preview = image.copy()
                 bar.update(1)
         if not indices:
             raise DataError(path, source.stopped_early or "no frame could be read")
-        return Detections(np.array(indices), columns), source.fps
+        if source.stopped_early:
+            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {len(indices)} frames before it", file=sys.stderr)
+        return ClipDetections(Detections(np.array(indices), columns), source.fps, roi, circle, preview)
+
+
+def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> tuple[np.ndarray | None, Circle | None]:
+    """The region of interest known before any frame is read ("auto" waits for the first)."""
+    if isinstance(roi, Circle):
+        return circle_mask(size, roi), roi
+    if isinstance(roi, Path):
+        return read_mask(roi, size), None
+    return None, None
+
+
+def _temporal_background(path: Path, settings: DetectionSettings, source: FrameSource) -> np.ndarray:
+    """Per-pixel median of up to 64 frames spread evenly over the processed range."""
+    spread = settings.step * max(1, math.ceil((source.frame_count or _BACKGROUND_FRAMES) / _BACKGROUND_FRAMES))
+    with open_frames(path, start=settings.start, end=settings.end, step=spread) as sample:
+        return temporal_median((to_gray(image) for _, image in sample), _BACKGROUND_FRAMES)
 
 
 def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
@@ -91,12 +195,23 @@ def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: Lifecycl
         return goa_updown_open(frames, config, lifecycle, first_frame, progress=bar.update)
 
 
-def render_overlay(path: Path, tracks: Tracks, frame_indices: np.ndarray, out: Path, fps: float, trail: int = 10) -> None:
-    """Write an H.264 clip of the input with every track's trail and id drawn over it."""
-    column_of_frame = {int(index): column for column, index in enumerate(frame_indices)}
-    with open_frames(path) as source:
+def render_overlay(
+    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
+) -> None:
+    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`),
+    of the frames ``selection.start``, ``end`` and ``step`` select, if given.
+
+    Detections that no track holds are marked as false detections.
+    """
+    span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
+    with open_frames(path, **span) as source:
+        view = View.of(source.size)
+        layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
+        rows = detections.to_rows()
+        false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
+        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(True))
         with progress_bar(source.frame_count, "rendering") as bar:
-            write_video(out, overlay_frames(iter(source), tracks, column_of_frame, trail), fps, progress=bar)
+            write_video(out, (image for _, image in frames), fps, progress=bar)
 
 
 def prepare_output_folder(folder: Path) -> None:
@@ -118,12 +233,12 @@ def prepare_output_folder(folder: Path) -> None:
 def run_pipeline(
     clip: Path,
     out: Path,
-    options: BlobOptions,
+    settings: DetectionSettings,
     config: GOAConfig,
     lifecycle: LifecycleConfig | None = LifecycleConfig(),
     min_length: int = 0,
 ) -> tuple[Detections, Tracks]:
-    """Detect, track and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
+    """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
     Tracking is :func:`link_frames` with ``lifecycle``; tracks spanning fewer than ``min_length``
     frames are not written.
@@ -132,9 +247,10 @@ def run_pipeline(
     finished.
     """
     prepare_output_folder(out)
-    detections, fps = detect_clip(clip, options)
+    found = detect_clip(clip, settings)
+    detections = found.detections
     write_table(out / "detections.csv", detections.to_rows())
     tracks = drop_short(link_frames(detections.points, config, lifecycle), min_length)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-    render_overlay(clip, tracks, detections.frame_indices, out / "overlay.mp4", fps)
+    render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
     return detections, tracks

@@ -7,7 +7,7 @@ import numpy as np
 
 from tracking.tracks import Tracks
 
-from .overlay import SHIFT, _fixed, track_colour
+from .render import SHIFT, to_fixed, track_colour
 
 # Pages are enlarged until they are at least this wide, so ids of small clips stay readable.
 _MIN_PAGE_WIDTH = 1280
@@ -51,13 +51,13 @@ def draw_review_page(frame: np.ndarray, tracks: Tracks, column: int, frame_index
         history = tracks.xy[row, start : column + 1] * zoom + offset
         history = history[~np.isnan(history[:, 0])]
         if len(history) > 1:
-            cv2.polylines(page, [_fixed(history)], False, track_colour(tracks.track_ids[row]), 2, cv2.LINE_AA, SHIFT)
+            cv2.polylines(page, [to_fixed(history)], False, track_colour(tracks.track_ids[row]), 2, cv2.LINE_AA, SHIFT)
     for row in present:
         colour = track_colour(tracks.track_ids[row])
         x, y = tracks.xy[row, column] * zoom + offset
         hollow = tracks.interpolated[row, column]
-        cv2.circle(page, tuple(_fixed(np.array([x, y]))), 4 << SHIFT, (0, 0, 0), 4, cv2.LINE_AA, SHIFT)
-        cv2.circle(page, tuple(_fixed(np.array([x, y]))), 4 << SHIFT, colour, 2 if hollow else -1, cv2.LINE_AA, SHIFT)
+        cv2.circle(page, tuple(to_fixed(np.array([x, y]))), 4 << SHIFT, (0, 0, 0), 4, cv2.LINE_AA, SHIFT)
+        cv2.circle(page, tuple(to_fixed(np.array([x, y]))), 4 << SHIFT, colour, 2 if hollow else -1, cv2.LINE_AA, SHIFT)
         origin = (int(round(x + 7)), int(round(y - 7)))
         text = str(tracks.track_ids[row])
         cv2.putText(page, text, origin, _FONT, 0.7, (0, 0, 0), 5, cv2.LINE_AA)

@@ -40,7 +40,21 @@ _SUPERSAMPLING = 4
 _CANDIDATES_PER_SEED = 200
 # Distinct streams from one random_seed, so that adding a knob never changes the noise.
 _NOISE_STREAM = 1
-_COMINGS_AND_GOINGS_STREAM = 2
+_CLUTTER_STREAM = 2
+_COMINGS_AND_GOINGS_STREAM = 3
+# Dish wall: a dark ring this many pixels wide just outside the dish, at this grey level, and
+# the shadow it casts on the dish: this many grey levels deep at the wall on the lit side's
+# opposite, fading inwards over this many pixels.
+_RIM_WIDTH = 3.0
+_RIM_GREY = 45.0
+_SHADOW_DEPTH = 40.0
+_SHADOW_FADE = 5.0
+# Glare: Gaussian spots of reflected light, fixed in the picture (they come from the lamp).
+_GLARE_SIGMA_RANGE = (2.0, 5.0)
+_GLARE_GREY_RANGE = (30.0, 60.0)
+# Dust: dark round specks lying on the dish, turning with it, this diameter in pixels.
+_DUST_DIAMETER = 1.5
+_DUST_GREY = 60.0
 # Frames a seed that is hidden, added or removed stays in view at each end of a clip, at least:
 # the fewest measured frames in a row from which a track can start.
 _SHOWN_AT_ENDS = 3
@@ -90,6 +104,16 @@ class DishSpec:
         (vignette plus a linear gradient).
     speed_jitter : float
         Relative standard deviation of the angular speed from frame to frame.
+    touching_pairs : int
+        How many pairs of seeds lie in contact, touching at a random angle from a random side;
+        they stay in contact as the dish turns.
+    rim : bool
+        Draw the dish wall as a dark ring just outside the dish, and its shadow on the dish.
+    glare_spots : int
+        Bright spots of reflected light, fixed in the picture while the dish turns beneath.
+    dust_specks : int
+        Dark specks 1.5 px across (a seed is 7 x 3.5) lying on the dish, turning with it, at
+        least a seed length away from every seed; not in the truth.
     """
 
     seeds: int = 80
@@ -110,6 +134,10 @@ class DishSpec:
     noise_sigma: float = 2.0
     illumination: float = 20.0
     speed_jitter: float = 0.005
+    touching_pairs: int = 0
+    rim: bool = False
+    glare_spots: int = 0
+    dust_specks: int = 0
 
     def __post_init__(self) -> None:
         checks = [
@@ -137,6 +165,12 @@ class DishSpec:
             (0 <= self.noise_sigma <= 100, "noise_sigma must be in [0, 100]"),
             (0 <= self.illumination <= 100, "illumination must be in [0, 100]"),
             (0 <= self.speed_jitter < 1, "speed_jitter must be in [0, 1)"),
+            (
+                _is_int(self.touching_pairs) and 0 <= 2 * self.touching_pairs <= max(self.seeds, 0),
+                "touching_pairs must be a whole number, at most half the seeds",
+            ),
+            (_is_int(self.glare_spots) and self.glare_spots >= 0, "glare_spots must be a whole number >= 0"),
+            (_is_int(self.dust_specks) and self.dust_specks >= 0, "dust_specks must be a whole number >= 0"),
         ]
         problems = [message for ok, message in checks if not ok]
         if problems:
@@ -171,7 +205,11 @@ class DishScene:
     seed_grey : ndarray of float, shape (seeds,)
         Grey level of each seed's body.
     background : ndarray of float32, shape (height, width)
-        The empty dish before blur and noise.
+        The empty dish before blur and noise (with its rim and shadow if asked for).
+    glare : ndarray of float32, shape (height, width)
+        Light added to every frame by the glare spots, grey levels.
+    dust_xy : ndarray of float, shape (dust_specks, frames, 2)
+        Centre of each dust speck in each frame, pixels.
     """
 
     spec: DishSpec
@@ -182,6 +220,8 @@ class DishScene:
     orientation: np.ndarray
     seed_grey: np.ndarray
     background: np.ndarray
+    glare: np.ndarray
+    dust_xy: np.ndarray
 
     def render(self, frame_index: int) -> np.ndarray:
         """Render one frame.
@@ -199,13 +239,17 @@ class DishScene:
         if not _is_int(frame_index) or not 0 <= frame_index < self.spec.frames:
             raise IndexError(f"frame_index must be in 0..{self.spec.frames - 1}, got {frame_index!r}")
         shown = self.visible[:, frame_index]
-        image = _draw_seeds(
+        n_shown, n_dust = int(shown.sum()), len(self.dust_xy)
+        spec = self.spec
+        image = _draw_ellipses(
             self.background,
-            self.truth.xy[shown, frame_index],
-            self.orientation[shown, frame_index],
-            self.seed_grey[shown],
-            self.spec,
+            np.concatenate([self.truth.xy[shown, frame_index], self.dust_xy[:, frame_index]]).reshape(-1, 2),
+            np.concatenate([self.orientation[shown, frame_index], np.zeros(n_dust)]),
+            np.concatenate([self.seed_grey[shown], np.full(n_dust, _DUST_GREY)]),
+            np.r_[np.full(n_shown, spec.seed_length / 2), np.full(n_dust, _DUST_DIAMETER / 2)],
+            np.r_[np.full(n_shown, spec.seed_width / 2), np.full(n_dust, _DUST_DIAMETER / 2)],
         )
+        image += self.glare
         if self.spec.blur_sigma > 0:
             image = cv2.GaussianBlur(image, (0, 0), self.spec.blur_sigma, borderType=cv2.BORDER_REFLECT)
         if self.spec.noise_sigma > 0:
@@ -231,15 +275,32 @@ def make_dish_scene(spec: DishSpec) -> DishScene:
     rng = np.random.default_rng(spec.random_seed)
     centre = np.array([(spec.width - 1) / 2, (spec.height - 1) / 2])
     radius = _DISH_RADIUS_FRACTION * min(spec.width, spec.height)
-    start = _place_seeds(rng, spec.seeds, _SEED_RADIUS_FRACTION * radius, _SEPARATION_IN_LENGTHS * spec.seed_length)
+    pairs = spec.touching_pairs
+    # A seed with a partner needs room for the partner, a seed length further out at most.
+    room = spec.seed_length if pairs else 0.0
+    start = _place_seeds(
+        rng, spec.seeds - pairs, _SEED_RADIUS_FRACTION * radius - room, _SEPARATION_IN_LENGTHS * spec.seed_length + room
+    )
     angle = _dish_angles(rng, spec.frames, spec.rim_speed / radius, spec.speed_jitter)
-    orientation = rng.uniform(0, np.pi, spec.seeds)[:, None] + angle[None, :]
+    heading = rng.uniform(0, np.pi, spec.seeds)
     seed_grey = rng.uniform(*_SEED_GREY_RANGE, spec.seeds)
     visible = rng.random((spec.seeds, spec.frames)) >= spec.hidden_probability
+    # Partners (the last seeds) touch the first seeds at a random angle from a random side.
+    clutter = np.random.default_rng((spec.random_seed, _CLUTTER_STREAM))
+    relative, side = clutter.uniform(0, np.pi, pairs), clutter.uniform(0, 2 * np.pi, pairs)
+    heading[spec.seeds - pairs :] = heading[:pairs] + relative
+    gap = _contact_distance(spec.seed_length / 2, spec.seed_width / 2, relative, side)
+    turn = heading[:pairs] + side
+    start = np.concatenate([start, start[:pairs] + gap[:, None] * np.column_stack([np.cos(turn), np.sin(turn)])])
+    orientation = heading[:, None] + angle[None, :]
     xy = centre + _rotate(start, angle)
     on_dish, hand = _comings_and_goings(spec)
     visible &= on_dish & ~hand
     xy[~on_dish] = np.nan
+    dust_start = _place_dust(clutter, spec.dust_specks, start, _SEED_RADIUS_FRACTION * radius, spec.seed_length)
+    background = _empty_dish(spec.width, spec.height, centre, radius, spec.illumination)
+    if spec.rim:
+        background = _add_rim(background, centre, radius)
     measurement = np.where(visible, np.arange(spec.seeds)[:, None], NO_MEASUREMENT)
     return DishScene(
         spec=spec,
@@ -249,7 +310,9 @@ def make_dish_scene(spec: DishSpec) -> DishScene:
         radius=float(radius),
         orientation=orientation,
         seed_grey=seed_grey,
-        background=_empty_dish(spec.width, spec.height, centre, radius, spec.illumination),
+        background=background,
+        glare=_glare(clutter, spec.glare_spots, spec.width, spec.height, centre, radius),
+        dust_xy=centre + _rotate(dust_start, angle),
     )
 
 
@@ -361,33 +424,136 @@ def _empty_dish(width: int, height: int, centre: np.ndarray, radius: float, illu
     return (_BACKGROUND_GREY + inside * (dish - _BACKGROUND_GREY)).astype(np.float32)
 
 
-def _draw_seeds(
-    background: np.ndarray, xy: np.ndarray, orientation: np.ndarray, grey: np.ndarray, spec: DishSpec
+def _contact_distance(a: float, b: float, relative: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Distance between the centres of two equal ellipses that touch.
+
+    Parameters
+    ----------
+    a, b : float
+        Semi-axes, pixels.
+    relative : ndarray, shape (n,)
+        Heading of the second ellipse relative to the first, radians.
+    side : ndarray, shape (n,)
+        Direction from the first centre to the second, relative to the first's heading.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Pixels; found by bisection to well below a thousandth of a pixel.
+    """
+    t = np.linspace(0, 2 * np.pi, 1440, endpoint=False)
+    rim_x, rim_y = a * np.cos(t), b * np.sin(t)
+    cos, sin = np.cos(relative)[:, None], np.sin(relative)[:, None]
+    direction_x, direction_y = np.cos(side)[:, None], np.sin(side)[:, None]
+
+    def overlap(distance: np.ndarray) -> np.ndarray:
+        d = distance[:, None]
+        # The second's rim in the first's frame, and the first's rim in the second's frame.
+        x2, y2 = d * direction_x + rim_x * cos - rim_y * sin, d * direction_y + rim_x * sin + rim_y * cos
+        x1, y1 = rim_x - d * direction_x, rim_y - d * direction_y
+        u, v = x1 * cos + y1 * sin, -x1 * sin + y1 * cos
+        inside_first = ((x2 / a) ** 2 + (y2 / b) ** 2).min(axis=1) < 1
+        inside_second = ((u / a) ** 2 + (v / b) ** 2).min(axis=1) < 1
+        return inside_first | inside_second
+
+    low, high = np.zeros(relative.size), np.full(relative.size, 2 * a + 1e-6)
+    for _ in range(40):
+        middle = (low + high) / 2
+        apart = ~overlap(middle)
+        high = np.where(apart, middle, high)
+        low = np.where(apart, low, middle)
+    return high
+
+
+def _place_dust(rng: np.random.Generator, count: int, seeds: np.ndarray, max_radius: float, clearance: float) -> np.ndarray:
+    """Dust positions (relative to the centre) at least ``clearance`` from every seed and speck.
+
+    Returns
+    -------
+    ndarray of float, shape (count, 2)
+    """
+    placed = np.empty((count, 2))
+    n_placed = 0
+    for candidate in _uniform_in_disc(rng, count * _CANDIDATES_PER_SEED, max_radius):
+        if n_placed == count:
+            break
+        others = np.concatenate([seeds, placed[:n_placed]])
+        if np.all(np.sum((others - candidate) ** 2, axis=1) >= clearance**2):
+            placed[n_placed] = candidate
+            n_placed += 1
+    if n_placed < count:
+        raise ValueError(f"only {n_placed} of {count} dust specks fit between the seeds; use fewer")
+    return placed
+
+
+def _add_rim(background: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
+    """The dish wall as a dark ring outside the dish, and its shadow falling on the dish from
+    the upper left."""
+    height, width = background.shape
+    y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+    dx, dy = x - np.float32(centre[0]), y - np.float32(centre[1])
+    rho = np.sqrt(dx * dx + dy * dy)
+    # Anti-aliased: the fraction of each pixel inside the ring, to first order.
+    ring = np.clip(np.minimum(rho - radius, radius + _RIM_WIDTH - rho) + 0.5, 0, 1)
+    toward_light = np.clip(-(dx + dy) / np.maximum(rho, 1) / np.float32(math.sqrt(2)), 0, 1)
+    shadow = _SHADOW_DEPTH * toward_light * np.exp(-np.clip(radius - rho, 0, None) / _SHADOW_FADE) * (rho < radius)
+    dish = background - shadow
+    return (dish + ring * (_RIM_GREY - dish)).astype(np.float32)
+
+
+def _glare(
+    rng: np.random.Generator, count: int, width: int, height: int, centre: np.ndarray, radius: float
 ) -> np.ndarray:
-    """Blend seeds into a copy of ``background`` by their exact pixel coverage.
+    """Light of ``count`` Gaussian glare spots on the dish, grey levels, shape (height, width)."""
+    spots = centre + _uniform_in_disc(rng, count, 0.9 * radius)
+    sigma = rng.uniform(*_GLARE_SIGMA_RANGE, count)
+    grey = rng.uniform(*_GLARE_GREY_RANGE, count)
+    y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+    light = np.zeros((height, width), np.float32)
+    for (cx, cy), s, g in zip(spots, sigma, grey):
+        light += np.float32(g) * np.exp(-((x - np.float32(cx)) ** 2 + (y - np.float32(cy)) ** 2) / np.float32(2 * s * s))
+    return light
+
+
+def _draw_ellipses(
+    background: np.ndarray, xy: np.ndarray, orientation: np.ndarray, grey: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """Blend ellipses (seeds, dust) into a copy of ``background`` by their exact pixel coverage.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (n, 2)
+        Centres, pixels.
+    orientation : ndarray, shape (n,)
+        Long-axis angles, radians.
+    grey : ndarray, shape (n,)
+        Grey level of each body.
+    a, b : ndarray, shape (n,)
+        Semi-axes, pixels.
 
     Returns
     -------
     ndarray of float32, shape (height, width)
     """
     height, width = background.shape
-    half = int(math.ceil(spec.seed_length / 2)) + 2
+    half = int(math.ceil(a.max(initial=0.0))) + 2
     offsets = np.arange(-half, half + 1)
-    # Each seed gets a square patch of pixels around the pixel nearest its centre.
+    # Each ellipse gets a square patch of pixels around the pixel nearest its centre.
     columns = np.rint(xy[:, 0])[:, None].astype(int) + offsets
     rows = np.rint(xy[:, 1])[:, None].astype(int) + offsets
-    coverage = _ellipse_coverage(columns, rows, xy, orientation, spec.seed_length / 2, spec.seed_width / 2)
+    coverage = _ellipse_coverage(columns, rows, xy, orientation, a, b)
     inside = ((columns >= 0) & (columns < width))[:, None, :] & ((rows >= 0) & (rows < height))[:, :, None]
     flat = (np.clip(rows, 0, height - 1)[:, :, None] * width + np.clip(columns, 0, width - 1)[:, None, :])[inside]
     covered = np.bincount(flat, weights=coverage[inside], minlength=height * width)
-    seed_ink = np.bincount(flat, weights=(coverage * grey[:, None, None])[inside], minlength=height * width)
-    # Seeds never overlap (placement keeps them apart), so coverage sums to at most 1.
-    image = background.ravel() * (1 - covered) + seed_ink
+    ink = np.bincount(flat, weights=(coverage * grey[:, None, None])[inside], minlength=height * width)
+    # Ellipses never overlap (placement keeps them apart or exactly touching), so coverage
+    # sums to at most 1 but for rounding where two touch.
+    image = background.ravel() * np.clip(1 - covered, 0, 1) + ink
     return image.reshape(height, width).astype(np.float32)
 
 
 def _ellipse_coverage(
-    columns: np.ndarray, rows: np.ndarray, xy: np.ndarray, orientation: np.ndarray, a: float, b: float
+    columns: np.ndarray, rows: np.ndarray, xy: np.ndarray, orientation: np.ndarray, a: np.ndarray, b: np.ndarray
 ) -> np.ndarray:
     """Fraction of each patch pixel covered by each seed's ellipse.
 
@@ -399,7 +565,7 @@ def _ellipse_coverage(
         Ellipse centres in pixels.
     orientation : ndarray, shape (n,)
         Long-axis angles in radians.
-    a, b : float
+    a, b : ndarray, shape (n,)
         Semi-axes in pixels.
 
     Returns
@@ -415,6 +581,7 @@ def _ellipse_coverage(
     sx = (columns[:, :, None] + sub).reshape(n, 1, p * s) - xy[:, 0, None, None]
     sy = (rows[:, :, None] + sub).reshape(n, p * s, 1) - xy[:, 1, None, None]
     cos, sin = np.cos(orientation)[:, None, None], np.sin(orientation)[:, None, None]
+    a, b = a[:, None, None], b[:, None, None]
     u = (sx * cos + sy * sin) / a
     v = (-sx * sin + sy * cos) / b
     q = np.sqrt(u * u + v * v)

@@ -40,6 +40,8 @@ class FrameSource:
         Frames per second (from the video; 25.0 for images).
     frame_count : int or None
         Number of frames iteration will yield if the source is intact; None if unknown.
+    clip_length : int or None
+        Frames in the whole clip if the source vouches for the count (not an estimate), else None.
     size : tuple of int
         (width, height) in pixels.
     stopped_early : str or None
@@ -59,6 +61,7 @@ class FrameSource:
         self.fps = reader.fps
         self.size = reader.size
         self.frame_count = _count(start, end, step, reader.length)
+        self.clip_length = reader.length if reader.exact else None
         self.stopped_early: str | None = None
 
     def __iter__(self) -> Iterator[Frame]:
@@ -309,3 +312,34 @@ def _to_bgr(image: np.ndarray) -> np.ndarray:
     if image.shape[2] == 1:
         return cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     return image
+
+
+def read_mask(path: str | os.PathLike, size: tuple[int, int]) -> np.ndarray:
+    """A region-of-interest mask image: nonzero (any channel) marks where to look.
+
+    Parameters
+    ----------
+    path : path-like
+        An image file (png, tif, ...).
+    size : tuple of int
+        (width, height) the frames have, pixels.
+
+    Returns
+    -------
+    ndarray of uint8, shape (height, width)
+        255 inside the region, 0 outside.
+
+    Raises
+    ------
+    DataError
+        If the file is not a readable image, is of another size, or marks no pixel.
+    """
+    image = cv2.imread(os.fspath(path), cv2.IMREAD_UNCHANGED) if Path(path).is_file() else None
+    if image is None:
+        raise DataError(path, "not a mask image this program can read")
+    if (image.shape[1], image.shape[0]) != tuple(size):
+        raise DataError(path, f"mask is {image.shape[1]}x{image.shape[0]}, the frames {size[0]}x{size[1]}")
+    marked = image.any(axis=2) if image.ndim == 3 else image != 0
+    if not marked.any():
+        raise DataError(path, "mask marks no pixel (all black)")
+    return np.where(marked, np.uint8(255), np.uint8(0))

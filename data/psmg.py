@@ -4,13 +4,9 @@ Chetverikov and Verestoy's generator, as Veenman et al. also used it: each point
 uniform position with a uniform direction and a normally distributed speed; from frame to
 frame its speed and direction take small Gaussian steps, and the speed is kept within
 [0, max_speed]. Only trajectories that stay inside the square view for the whole sequence are
-kept (data "without entry/exit"), so every trajectory spans every frame. With ``entry_exit``
-the points are drawn in a larger square around the view instead, so that they cross its border:
-each stay in the view of at least 3 frames is one true trajectory (as in Primet's tpsmg), shorter
-stays are not measured. A point may be occluded (not measured) for up to ``max_occlusion``
-frames in a row, never in the first or last three frames of its trajectory. Positions are
-pixels, x right, y down; frames are 0-based. Measurements are shuffled within each frame so
-that no tracker can use their order.
+kept (data "without entry/exit"), so every trajectory spans every frame. A point may be
+occluded (not measured) for single frames, away from the sequence's ends. Positions are pixels, x right, y down; frames are
+0-based. Measurements are shuffled within each frame so that no tracker can use their order.
 """
 
 from __future__ import annotations
@@ -26,12 +22,12 @@ from tracking.tracks import NO_MEASUREMENT, Tracks
 # almost always fit, fast ones in a small view need more.
 _BATCH_FACTOR = 4
 _MAX_ATTEMPTS = 200
-# Shortest stay in the view that counts as a trajectory with entry/exit, frames.
-_SHORTEST_STAY = 3
-# Frames at each end of a trajectory without occlusion: every trajectory then begins and ends
+# Frames at each end of the sequence without occlusion: every trajectory then begins and ends
 # with three measured points, the least that a triplet-based tracker (IPAN) needs to start or
 # end a trajectory. The sources do not say where their generator put occlusions.
 _CLEAR_ENDS = 3
+# With entry and exit, a trajectory is kept if it is in view in this many frames at least.
+_MIN_IN_VIEW = 3
 
 
 @dataclass(frozen=True)
@@ -41,8 +37,7 @@ class PSMGSpec:
     Attributes
     ----------
     trajectories : int
-        Number of points (all spanning every frame); with ``entry_exit``, the number of points
-        in the view on average (more are drawn around it, at the same density).
+        Number of points (all spanning every frame).
     frames : int
         Number of frames.
     size : float
@@ -58,13 +53,15 @@ class PSMGSpec:
     max_speed : float or None
         Largest speed, pixels/frame; None for twice the mean speed.
     occlusion : float
-        Probability that an occlusion starts in a frame (never in the first three or the last
-        three frames of a trajectory, never right after another occlusion).
-    max_occlusion : int
-        Longest occlusion, frames; each lasts a uniformly drawn 1..max_occlusion frames, cut
-        short before the trajectory's last three frames.
+        Probability that a point's occlusion starts in a frame (never in the first three or the
+        last three frames; after an occlusion the point is seen at least once before the next).
+    max_gap : int
+        Longest occlusion, frames; each lasts 1 to ``max_gap`` frames (uniform), cut short three
+        frames before the end.
     entry_exit : bool
-        Points enter and leave the view (see above).
+        Draw trajectories in a larger square around the view (by the distance a point can travel
+        in the sequence on each side), so that points enter and leave; a trajectory is kept if
+        it is in view in at least three frames, and has no position outside the view.
     random_seed : int
         Seed of every random choice: same spec, same data.
     """
@@ -78,7 +75,7 @@ class PSMGSpec:
     angle_step_sigma: float = 0.0
     max_speed: float | None = None
     occlusion: float = 0.0
-    max_occlusion: int = 1
+    max_gap: int = 1
     entry_exit: bool = False
     random_seed: int = 0
 
@@ -91,8 +88,8 @@ class PSMGSpec:
             raise ValueError("standard deviations must be non-negative")
         if not 0 <= self.occlusion < 1:
             raise ValueError(f"occlusion must lie in [0, 1), got {self.occlusion}")
-        if self.max_occlusion < 1:
-            raise ValueError(f"max_occlusion must be at least 1 frame, got {self.max_occlusion}")
+        if self.max_gap < 1:
+            raise ValueError(f"max_gap must be at least 1 frame, got {self.max_gap}")
 
     @property
     def speed_limit(self) -> float:
@@ -108,7 +105,7 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
     frames : list of ndarray, each (M_k, 2)
         Measured positions per frame, pixels, in random order.
     truth : Tracks
-        One track per trajectory with its position in every frame it spans (NaN outside);
+        One track per trajectory with its position in every frame it is in view (NaN outside);
         occluded frames are marked interpolated (no measurement).
 
     Raises
@@ -117,13 +114,15 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
         If trajectories that stay in the view are too rare to draw (speed too high for the size).
     """
     rng = np.random.default_rng(spec.random_seed)
-    paths = _stays_in_view(rng, spec) if spec.entry_exit else _paths_in_view(rng, spec)
-    spans = ~np.isnan(paths[..., 0])
-    hidden = _occlusions(rng, spec, spans)
-    measurement = np.full(spans.shape, NO_MEASUREMENT, dtype=np.int64)
-    frames = []
+    paths = _paths_in_view(rng, spec)
+    hidden = _occlusions(rng, spec)
+    if spec.entry_exit:
+        outside = ((paths < 0) | (paths > spec.size)).any(axis=2)
+        paths[outside] = np.nan
+        hidden |= outside
+    frames, measurement = [], np.full((spec.trajectories, spec.frames), NO_MEASUREMENT, dtype=np.int64)
     for k in range(spec.frames):
-        seen = np.flatnonzero(spans[:, k] & ~hidden[:, k])
+        seen = np.flatnonzero(~hidden[:, k])
         order = rng.permutation(seen.size)
         frames.append(paths[seen[order], k])
         measurement[seen[order], k] = np.arange(seen.size)
@@ -131,14 +130,17 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
 
 
 def _paths_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(trajectories, frames, 2) positions of trajectories that never leave the view."""
+    """(trajectories, frames, 2) positions of trajectories that never leave the view, or with
+    entry/exit, that are in view in at least three frames."""
     kept: list[np.ndarray] = []
     wanted = spec.trajectories
+    margin = spec.speed_limit * (spec.frames - 1) if spec.entry_exit else 0.0
     for _ in range(_MAX_ATTEMPTS):
         if wanted <= 0:
             break
-        batch = _random_paths(rng, spec, _BATCH_FACTOR * wanted + 8)
-        inside = ((batch >= 0) & (batch <= spec.size)).all(axis=(1, 2))
+        batch = _random_paths(rng, spec, _BATCH_FACTOR * wanted + 8, margin)
+        in_view = ((batch >= 0) & (batch <= spec.size)).all(axis=2)
+        inside = in_view.sum(axis=1) >= _MIN_IN_VIEW if spec.entry_exit else in_view.all(axis=1)
         kept.append(batch[inside][:wanted])
         wanted -= kept[-1].shape[0]
     if wanted > 0:
@@ -149,34 +151,8 @@ def _paths_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
     return np.concatenate(kept) if kept else np.empty((0, spec.frames, 2))
 
 
-def _stays_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(stays, frames, 2) positions of every stay of at least 3 frames in the view, NaN outside.
-
-    Points start in a square that reaches ``mean_speed * (frames - 1)`` beyond the view on each
-    side, as many as keep the view's density at ``trajectories / size**2``.
-    """
-    margin = spec.mean_speed * max(spec.frames - 1, 0)
-    outer = spec.size + 2 * margin
-    count = int(round(spec.trajectories * (outer / spec.size) ** 2))
-    paths = _random_paths(rng, spec, count, low=-margin, high=spec.size + margin)
-    inside = ((paths >= 0) & (paths <= spec.size)).all(axis=2)
-    # Label each run of in-view frames: a new run starts where a point (re-)enters.
-    enters = inside & ~np.concatenate((np.zeros((count, 1), bool), inside[:, :-1]), axis=1)
-    run = np.cumsum(enters.ravel()).reshape(inside.shape) - 1
-    length = np.bincount(run[inside], minlength=int(enters.sum()))
-    keep = inside & (length[np.where(inside, run, 0)] >= _SHORTEST_STAY)
-    kept_runs, row = np.unique(run[keep], return_inverse=True)
-    stays = np.full((kept_runs.size, spec.frames, 2), np.nan)
-    point, frame = np.nonzero(keep)
-    stays[row, frame] = paths[point, frame]
-    return stays
-
-
-def _random_paths(
-    rng: np.random.Generator, spec: PSMGSpec, count: int, low: float = 0.0, high: float | None = None
-) -> np.ndarray:
-    """(count, frames, 2) random smooth paths starting uniformly in [low, high]^2 (high: size)."""
-    start = rng.uniform(low, spec.size if high is None else high, size=(count, 2))
+def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int, margin: float = 0.0) -> np.ndarray:
+    start = rng.uniform(-margin, spec.size + margin, size=(count, 2))
     heading = rng.uniform(0.0, 2.0 * math.pi, size=count)
     speed = rng.normal(spec.mean_speed, spec.speed_sigma, size=count)
     heading_steps = rng.normal(0.0, math.radians(spec.angle_step_sigma), size=(count, max(spec.frames - 2, 0)))
@@ -192,22 +168,16 @@ def _random_paths(
     return start[:, None, :] + np.concatenate((np.zeros((count, 1, 2)), np.cumsum(steps, axis=1)), axis=1)
 
 
-def _occlusions(rng: np.random.Generator, spec: PSMGSpec, spans: np.ndarray) -> np.ndarray:
-    """(trajectories, frames) bool: occlusions inside each trajectory's span, apart from each other.
-
-    ``spans`` (trajectories, frames) marks the frames each trajectory is in the view; its runs
-    are contiguous. An occlusion may start where the frame before is visible, and neither it nor
-    any of its frames lies in the first or last three frames of the span.
-    """
-    starts = rng.random(spans.shape) < spec.occlusion
-    length = rng.integers(1, spec.max_occlusion + 1, size=spans.shape) if spec.max_occlusion > 1 else np.ones(spans.shape, np.int64)
-    frame = np.arange(spec.frames)
-    span_first = np.where(spans, frame, spec.frames).min(axis=1)
-    latest = np.where(spans, frame, -1).max(axis=1) - _CLEAR_ENDS  # last frame an occlusion may cover
-    hidden = np.zeros(spans.shape, bool)
-    last_hidden = np.full(spans.shape[0], -2)
-    for k in range(1, spec.frames):
-        begin = starts[:, k] & (k >= span_first + _CLEAR_ENDS) & (k <= latest) & (last_hidden < k - 1)
-        last_hidden = np.where(begin, np.minimum(k + length[:, k] - 1, latest), last_hidden)
-        hidden[:, k] = last_hidden >= k
+def _occlusions(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
+    """(trajectories, frames) bool: occlusions of 1 to max_gap frames, away from the first and
+    last three frames, each followed by at least one frame in which the point is seen."""
+    starts = rng.random((spec.trajectories, spec.frames)) < spec.occlusion
+    length = rng.integers(1, spec.max_gap + 1, size=starts.shape) if spec.max_gap > 1 else np.ones(starts.shape, int)
+    hidden = np.zeros(starts.shape, bool)
+    remaining = np.zeros(spec.trajectories, int)
+    for k in range(_CLEAR_ENDS, spec.frames - _CLEAR_ENDS):
+        begin = starts[:, k] & (remaining == 0) & ~hidden[:, k - 1]
+        remaining = np.where(begin, length[:, k], remaining)
+        hidden[:, k] = remaining > 0
+        remaining = np.maximum(remaining - 1, 0)
     return hidden

@@ -38,7 +38,7 @@ class VideoInfo:
     exact : bool
         Whether ``frame_count`` is the header's count rather than an estimate.
     fps : float
-        Frames per second (average rate; 25.0 if the file does not say).
+        Frames per second (FFmpeg's guess, else the average rate; 25.0 if the file does not say).
     size : tuple of int
         (width, height) in pixels.
     codec : str
@@ -212,7 +212,9 @@ def open_container(path: str | os.PathLike):
 
 def video_info(stream) -> VideoInfo:
     """Header facts of an open PyAV video stream; see :class:`VideoInfo`."""
-    rate = stream.average_rate or stream.guessed_rate
+    # FFmpeg's guess (the container's nominal rate) first: the average over the stream's
+    # duration is wild when timestamps are broken (bulk-water-240-479.mp4 averages 5754/s).
+    rate = stream.guessed_rate or stream.average_rate
     fps = float(rate) if rate else 25.0
     return VideoInfo(
         frame_count=_frame_count(stream, fps),

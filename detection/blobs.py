@@ -1,7 +1,10 @@
 """Threshold blob detector: dark (or light) blobs become point measurements.
 
-A frame goes in, a table of measurements comes out: threshold, connected components,
-area limits, intensity-weighted centroids. Nothing here knows about tracking or files.
+A frame goes in, a table of measurements comes out. Each pixel's *contrast* against a
+background estimate (local median, a given image, or the frame's median) is thresholded,
+connected pixels form blobs, touching blobs are split, area limits drop dust and clutter, and
+each blob is measured: contrast-weighted centroid, area, mean grey level, eccentricity.
+Nothing here knows about tracking or files.
 """
 
 from __future__ import annotations
@@ -11,7 +14,15 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-MEASUREMENT_COLUMNS = ("x", "y", "area", "mean_intensity")
+from .background import contrast_histogram, flat_background, local_background, noise_floor, otsu_above
+from .split import split_touching
+
+MEASUREMENT_COLUMNS = ("x", "y", "area", "mean_intensity", "eccentricity")
+POLARITIES = ("dark", "light", "auto")
+BACKGROUNDS = ("local", "none", "temporal")
+THRESHOLD_METHODS = ("otsu", "adaptive")
+# Niblack's adaptive threshold: local mean plus this many local standard deviations.
+_ADAPTIVE_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -20,28 +31,49 @@ class BlobOptions:
 
     Attributes
     ----------
-    polarity : {"dark", "light"}
-        Whether objects are darker or lighter than their surroundings.
-    threshold : float or None
-        Grey level (0-255) that separates objects from the background; None picks one per
-        frame with Otsu's method.
+    polarity : {"auto", "dark", "light"}
+        Whether objects are darker or lighter than the background; "auto" picks the side with
+        more contrast standing out of the noise.
+    background : {"local", "none", "temporal"}
+        "local": a median over windows of ``background_size`` pixels; "none": the frame's
+        median grey level everywhere; "temporal": an image the caller passes (the median over
+        time of a static scene, see :func:`detection.background.temporal_median`).
+    background_size : float
+        Window of the local background, pixels; must be well above an object's size.
+    threshold : "otsu", "adaptive" or float
+        "otsu": Otsu's level among the pixels whose contrast stands out of the noise;
+        "adaptive": per pixel, the local mean plus 3 local standard deviations of the contrast
+        (Niblack), never below the noise floor; a number: the smallest contrast of an object
+        pixel, grey levels (0-255).
     min_area_px, max_area_px : float or None
         Blobs with fewer or more pixels are dropped; None leaves that side open, except that
         blobs covering more than ``max_area_fraction`` of the frame are always background.
     max_area_fraction : float
         Largest blob, as a fraction of the frame's pixels, that can be an object.
+    split : bool
+        Split blobs of touching objects (see :func:`detection.split.split_touching`).
     """
 
-    polarity: str = "dark"
-    threshold: float | None = None
-    min_area_px: float | None = 3.0
+    polarity: str = "auto"
+    background: str = "local"
+    background_size: float = 40.0
+    threshold: str | float = "otsu"
+    min_area_px: float | None = 4.0
     max_area_px: float | None = None
     max_area_fraction: float = 0.01
+    split: bool = True
 
     def __post_init__(self) -> None:
-        if self.polarity not in ("dark", "light"):
-            raise ValueError(f"polarity must be 'dark' or 'light', got {self.polarity!r}")
-        if self.threshold is not None and not 0 <= self.threshold <= 255:
+        if self.polarity not in POLARITIES:
+            raise ValueError(f"polarity must be one of {', '.join(POLARITIES)}, got {self.polarity!r}")
+        if self.background not in BACKGROUNDS:
+            raise ValueError(f"background must be one of {', '.join(BACKGROUNDS)}, got {self.background!r}")
+        if not 3 <= self.background_size <= 2000:
+            raise ValueError(f"background size must lie in 3..2000 px, got {self.background_size}")
+        if isinstance(self.threshold, str):
+            if self.threshold not in THRESHOLD_METHODS:
+                raise ValueError(f"threshold must be otsu, adaptive or a number, got {self.threshold!r}")
+        elif not 0 <= self.threshold <= 255:
             raise ValueError(f"threshold must lie in 0..255, got {self.threshold}")
         for name in ("min_area_px", "max_area_px"):
             value = getattr(self, name)
@@ -58,7 +90,79 @@ def to_gray(image: np.ndarray) -> np.ndarray:
     return image
 
 
-def detect_blobs(image: np.ndarray, options: BlobOptions = BlobOptions()) -> dict[str, np.ndarray]:
+def background_of(gray: np.ndarray, options: BlobOptions, background: np.ndarray | None = None) -> np.ndarray:
+    """The background estimate ``options`` ask for (``background`` for "temporal")."""
+    if options.background == "temporal":
+        if background is None:
+            raise ValueError("a temporal background needs the background image")
+        if background.shape != gray.shape:
+            raise ValueError(f"background is {background.shape[1]}x{background.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
+        return background
+    if options.background == "none":
+        return flat_background(gray)
+    return local_background(gray, options.background_size)
+
+
+def choose_polarity(gray: np.ndarray, background: np.ndarray, roi: np.ndarray | None = None) -> str:
+    """The polarity, "dark" or "light", whose contrast beyond the noise floor weighs more.
+
+    Parameters
+    ----------
+    gray, background : ndarray of uint8, shape (H, W)
+    roi : ndarray of uint8, shape (H, W), optional
+        Nonzero where to look.
+    """
+    mass = {}
+    for side, signal in (("dark", cv2.subtract(background, gray)), ("light", cv2.subtract(gray, background))):
+        histogram = contrast_histogram(signal, roi)
+        floor = noise_floor(histogram)
+        levels = np.arange(256)
+        mass[side] = float(np.sum(histogram * np.clip(levels - floor, 0, None)))
+    return "dark" if mass["dark"] >= mass["light"] else "light"
+
+
+def contrast(gray: np.ndarray, options: BlobOptions, background: np.ndarray | None = None, roi: np.ndarray | None = None) -> np.ndarray:
+    """How far each pixel lies on the objects' side of the background, grey levels.
+
+    Parameters
+    ----------
+    gray : ndarray of uint8, shape (H, W)
+    options : BlobOptions
+        Polarity and background.
+    background : ndarray of uint8, shape (H, W), optional
+        The background image when ``options.background`` is "temporal".
+    roi : ndarray of uint8, shape (H, W), optional
+        Contrast is zero where it is zero.
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W)
+    """
+    if roi is not None and roi.shape != gray.shape:
+        raise ValueError(f"region of interest is {roi.shape[1]}x{roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
+    base = background_of(gray, options, background)
+    polarity = options.polarity if options.polarity != "auto" else choose_polarity(gray, base, roi)
+    # uint8 (saturating) so that whole-frame passes stay cheap.
+    signal = cv2.subtract(base, gray) if polarity == "dark" else cv2.subtract(gray, base)
+    if roi is not None:
+        signal = cv2.bitwise_and(signal, signal, mask=roi)
+    return signal
+
+
+def eccentricity(sxx: np.ndarray, syy: np.ndarray, sxy: np.ndarray) -> np.ndarray:
+    """Eccentricity of the ellipses with second central moments sxx, syy, sxy (0 for a circle)."""
+    half_gap = np.sqrt(((sxx - syy) / 2) ** 2 + sxy**2)
+    major, minor = (sxx + syy) / 2 + half_gap, np.maximum((sxx + syy) / 2 - half_gap, 0)
+    return np.sqrt(1 - np.divide(minor, major, out=np.ones_like(major), where=major > 0))
+
+
+def detect_blobs(
+    image: np.ndarray,
+    options: BlobOptions = BlobOptions(),
+    *,
+    background: np.ndarray | None = None,
+    roi: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
     """Find blobs in one frame and measure them.
 
     Parameters
@@ -66,48 +170,86 @@ def detect_blobs(image: np.ndarray, options: BlobOptions = BlobOptions()) -> dic
     image : ndarray of uint8, shape (H, W) or (H, W, 3) BGR
         The frame.
     options : BlobOptions
-        Polarity, threshold and area limits.
+        Polarity, background, threshold, area limits, splitting.
+    background : ndarray of uint8, shape (H, W), optional
+        The background image when ``options.background`` is "temporal".
+    roi : ndarray of uint8, shape (H, W), optional
+        Region of interest: blobs are looked for only where it is nonzero.
 
     Returns
     -------
     dict of str to ndarray
-        ``x``, ``y``: intensity-weighted centroid, pixels (x to the right, y down, pixel
+        ``x``, ``y``: contrast-weighted centroid, pixels (x to the right, y down, pixel
         centres at integer coordinates); ``area``: pixels in the blob; ``mean_intensity``:
-        mean grey level (0-255) of the blob. Sorted by y, then x. Empty arrays when the
-        frame holds no blob.
+        mean grey level (0-255) of the blob; ``eccentricity``: of the ellipse with the blob's
+        second moments (0 round, towards 1 elongated). Sorted by y, then x. Empty arrays when
+        the frame holds no blob.
     """
     gray = to_gray(image)
-    # Work on "objectness": how far each pixel is on the object side of the background.
-    # Kept in uint8 (exact, since 255 - gray is integral) so whole-frame passes stay cheap.
-    signal = cv2.bitwise_not(gray) if options.polarity == "dark" else gray
-    level = _threshold(signal, options.threshold, options.polarity)
-    mask = (signal > level).astype(np.uint8)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    area = stats[1:, cv2.CC_STAT_AREA].astype(float)
-    keep = area <= options.max_area_fraction * gray.size
-    if options.min_area_px is not None:
-        keep &= area >= options.min_area_px
+    signal = contrast(gray, options, background, roi)
+    level = _level(signal, options.threshold, options.background_size, roi)
+    mask = np.greater(signal, level) if np.ndim(level) else cv2.threshold(signal, level, 1, cv2.THRESH_BINARY)[1].view(bool)
+    inside = np.flatnonzero(mask)
+    if inside.size == 0:
+        return _empty()
+    count, labels = cv2.connectedComponents(mask.view(np.uint8), connectivity=8, ltype=cv2.CV_32S)
+    label = labels.ravel()[inside]
+    weight = signal.ravel()[inside] - (level if not np.ndim(level) else level.ravel()[inside])
+    if options.split:
+        label, count = split_touching(label, count, inside, gray.shape, weight, _area_limits(options, gray.size))
+    return _measure(label, count, inside, weight, gray, _area_limits(options, gray.size))
+
+
+def _level(signal: np.ndarray, threshold: str | float, window: float, roi: np.ndarray | None) -> float | np.ndarray:
+    """Contrast above which a pixel is an object pixel: a number, or a per-pixel map."""
+    if not isinstance(threshold, str):
+        return float(threshold)
+    histogram = contrast_histogram(signal, roi)
+    floor = noise_floor(histogram)
+    if threshold == "otsu":
+        return otsu_above(histogram, floor)
+    contrast = signal.astype(np.float32)
+    size = (int(window), int(window))
+    mean = cv2.boxFilter(contrast, -1, size)
+    spread = np.sqrt(np.maximum(cv2.boxFilter(contrast * contrast, -1, size) - mean * mean, 0))
+    return np.maximum(mean + np.float32(_ADAPTIVE_SIGMAS) * spread, np.float32(floor))
+
+
+def _area_limits(options: BlobOptions, frame_pixels: int) -> tuple[float, float]:
+    low = options.min_area_px if options.min_area_px is not None else 0.0
+    high = options.max_area_fraction * frame_pixels
     if options.max_area_px is not None:
-        keep &= area <= options.max_area_px
-    if count <= 1 or not keep.any():
-        return {name: np.empty(0) for name in MEASUREMENT_COLUMNS}
-    flat_labels = labels.ravel()
-    inside = np.flatnonzero(flat_labels)
+        high = min(high, options.max_area_px)
+    return low, high
+
+
+def _measure(
+    label: np.ndarray, count: int, inside: np.ndarray, weight: np.ndarray, gray: np.ndarray, limits: tuple[float, float]
+) -> dict[str, np.ndarray]:
+    """Per-blob measurements from the object pixels' labels (label 0 is never used)."""
+    area = np.bincount(label, minlength=count)[1:].astype(float)
+    keep = (area >= limits[0]) & (area <= limits[1])
+    if not keep.any():
+        return _empty()
     rows, columns = np.divmod(inside, gray.shape[1])
-    label = flat_labels[inside]
-    w = signal.ravel()[inside] - level
-    total = np.bincount(label, weights=w, minlength=count)[1:]
-    x = np.bincount(label, weights=w * columns, minlength=count)[1:] / total
-    y = np.bincount(label, weights=w * rows, minlength=count)[1:] / total
-    intensity = np.bincount(label, weights=gray.ravel()[inside], minlength=count)[1:] / area
-    table = {"x": x[keep], "y": y[keep], "area": area[keep], "mean_intensity": intensity[keep]}
+
+    def total(values: np.ndarray | None) -> np.ndarray:
+        return np.bincount(label, weights=values, minlength=count)[1:][keep]
+
+    area = area[keep]
+    mass = total(weight)
+    x = total(weight * columns) / mass
+    y = total(weight * rows) / mass
+    intensity = total(gray.ravel()[inside].astype(float)) / area
+    # Shape from the unweighted second moments about each blob's own centre of pixels.
+    cx, cy = total(columns.astype(float)) / area, total(rows.astype(float)) / area
+    sxx = total(columns * columns.astype(float)) / area - cx * cx
+    syy = total(rows * rows.astype(float)) / area - cy * cy
+    sxy = total(columns * rows.astype(float)) / area - cx * cy
+    table = {"x": x, "y": y, "area": area, "mean_intensity": intensity, "eccentricity": eccentricity(sxx, syy, sxy)}
     order = np.lexsort((table["x"], table["y"]))
     return {name: values[order] for name, values in table.items()}
 
 
-def _threshold(signal: np.ndarray, threshold: float | None, polarity: str) -> float:
-    """Objectness level that separates objects; a grey-level threshold is converted."""
-    if threshold is not None:
-        return 255.0 - threshold if polarity == "dark" else float(threshold)
-    level, _ = cv2.threshold(signal, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-    return float(level)
+def _empty() -> dict[str, np.ndarray]:
+    return {name: np.empty(0) for name in MEASUREMENT_COLUMNS}

@@ -7,6 +7,7 @@ from tracking.ipan import IPANConfig, bridge_cost, ipan
 from tracking.nn import link_nearest, nearest_neighbour
 from tracking.rs import greedy_conditioned_assignment, rangarajan_shah
 from tracking.ss import sethi_jain
+from tracking.trackers import TRACKERS as REGISTRY, run_tracker
 from tracking.tracks import tracks_from_links
 
 T = np.arange(8.0)
@@ -131,6 +132,41 @@ def test_rs_tracks_only_the_points_of_the_first_frame():
     missing = {(1, 0), (1, 1), (1, 2)}
     tracks = TRACKERS["rs"](frames_of(LINE, LATE, missing=missing))
     assert paths(tracks) == expected((0, LINE))
+
+
+# The paper's constructed example (its Fig. 5, coordinates lost): the two crossing points, p1
+# missed in frame 3 and p2 in frame 4, right where they cross.
+CROSSING_MISSES = {(0, 3), (1, 4)}
+
+
+def test_constructed_example_rs_extrapolates_both_gaps_correctly():
+    tracks = TRACKERS["rs"](frames_of(P1, P2, missing=CROSSING_MISSES))
+    assert paths(tracks) == expected((0, P1), (0, P2))
+
+
+def test_constructed_example_breaks_ss_into_four_parts_at_phi_max_005():
+    tracks = sethi_jain(frames_of(P1, P2, missing=CROSSING_MISSES), phi_max=0.05, d_max=20)
+    assert paths(tracks) == expected((0, P1[:3]), (0, P2[:4]), (4, P1[4:]), (5, P2[5:]))
+
+
+def test_constructed_example_ipan_is_right_only_after_post_processing():
+    frames = frames_of(P1, P2, missing=CROSSING_MISSES)
+    # delta_max 0.3: at the default 0.6 the halt of p2 onto p1's frame-4 point (cost 0.47) passes.
+    config = IPANConfig(v_max=20, delta_max=0.3)
+    assert paths(ipan(frames, config)) == expected((0, P1), (0, P2))
+    assert paths(ipan(frames, IPANConfig(v_max=20, delta_max=0.3, max_gap=0))) == expected(
+        (0, P1[:3]), (0, P2[:4]), (4, P1[4:]), (5, P2[5:])
+    )
+
+
+@pytest.mark.parametrize("name", sorted(REGISTRY))
+def test_registered_trackers_refuse_bad_frames_and_limits(name):
+    with pytest.raises(ValueError, match="must be positive"):
+        run_tracker(name, frames_of(LINE), max_speed=0.0)
+    with pytest.raises(ValueError, match="frame 1 must hold"):
+        run_tracker(name, [LINE[:2], np.zeros((2, 3))], max_speed=10.0)
+    with pytest.raises(ValueError, match="frame 0 holds a non-finite"):
+        run_tracker(name, [[[np.nan, 1.0]], LINE[1:2]], max_speed=10.0)
 
 
 def test_rs_greedy_prefers_the_pair_whose_alternatives_are_poor():

@@ -114,7 +114,7 @@ def test_seeds_added_and_removed_mid_clip_get_tracks_of_their_own():
 def test_on_psmg_with_entry_exit_the_open_mode_is_at_least_ipan_and_fixed_count():
     merit = {"goa-updown": 0, "ipan": 0, "goa-updown-fixed": 0}
     for seed in range(2):
-        spec = replace(BASE, frames=25, occlusion=0.05, max_occlusion=3, entry_exit=True, random_seed=seed)
+        spec = replace(BASE, frames=25, occlusion=0.05, max_gap=3, entry_exit=True, random_seed=seed)
         frames, truth = generate_psmg(spec)
         for name in merit:
             merit[name] += score_tracks(run_tracker(name, frames, spec.speed_limit), truth, 0.5).correct_tracks

@@ -13,7 +13,7 @@ that the early frames are re-decided with the velocities learned later.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links
 from .motion import Candidates, CombinedModel, IndividualModel
-from .tracks import Tracks, tracks_from_assignment
+from .tracks import Tracks, check_limit, link_speed_limit, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
 
@@ -58,6 +58,11 @@ class GOAConfig:
         Frames spanned by the paths that score the first links (3 = one triplet).
     neighbours : int
         Candidates per head without a velocity when d_max is None.
+    restart_lost : bool
+        Let GOA-updown's down pass start tracks from the last frame's measurements that no head
+        of the up pass holds, reusing heads the up pass lost (default). The paper's down pass
+        starts only from the up pass's last links, so a head that lost its point (e.g. after a
+        wrong first link) stays lost and that point's track is missing.
     solver : {"split", "dense"}
         Solve each frame per connected component of the gated graph (fast), or the whole
         augmented matrix at once (the paper's form; for checking).
@@ -72,13 +77,12 @@ class GOAConfig:
     initialisation: str = "lookahead"
     lookahead: int = 5
     neighbours: int = 8
+    restart_lost: bool = True
     solver: str = "split"
 
     def __post_init__(self) -> None:
-        if not self.phi_max > 0:
-            raise ValueError(f"phi_max must be positive, got {self.phi_max}")
-        if self.d_max is not None and not self.d_max > 0:
-            raise ValueError(f"d_max must be positive, got {self.d_max}")
+        check_limit("phi_max", self.phi_max, optional=False)
+        check_limit("d_max", self.d_max)
         if self.d_min < 0 or (self.d_max is not None and self.d_min >= self.d_max):
             raise ValueError(f"d_min must be non-negative and below d_max, got {self.d_min}")
         if self.corner not in ("zero", "phi"):
@@ -266,6 +270,32 @@ def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray
     return np.column_stack((first, second))
 
 
+def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """The down pass's first links (in reversed frame order): the up pass's last links and, with
+    ``restart_lost``, fresh links for every measurement of the last frame that no head holds,
+    on heads the up pass lost (no measurement in either of the last two frames), then on new
+    heads. Without d_max the fresh links are limited to the speeds the up pass saw: IM2 is
+    scale free, and among a few free points a fast chain of unrelated points can look smooth."""
+    backwards = frames[::-1]
+    start = up[:, ::-1][:, :2]
+    free = np.setdiff1d(np.arange(backwards[0].shape[0]), start[:, 0])
+    if not (config.restart_lost and free.size):
+        return start
+    if config.d_max is None:
+        config = replace(config, d_max=link_speed_limit(tracks_from_assignment(list(frames), up)))
+    unused = np.setdiff1d(np.arange(backwards[1].shape[0]), start[:, 1])
+    fresh = initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
+    second = np.full(free.size, UNASSIGNED, dtype=start.dtype)
+    linked = fresh[:, 1] != UNASSIGNED
+    second[linked] = unused[fresh[linked, 1]]
+    lost = np.flatnonzero((start == UNASSIGNED).all(axis=1))[: free.size]
+    extra = free.size - lost.size
+    start = np.concatenate((start, np.full((extra, 2), UNASSIGNED, dtype=start.dtype)))
+    rows = np.concatenate((lost, np.arange(start.shape[0] - extra, start.shape[0])))
+    start[rows] = np.column_stack((free, second))
+    return start
+
+
 def goa(
     frames: Sequence[np.ndarray],
     initial: np.ndarray,
@@ -292,7 +322,7 @@ def goa(
     Tracks
         One track per row of ``initial``; bound slaves interpolated.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     assignment = goa_pass(frames, np.asarray(initial, dtype=np.int64), config, progress)
     return tracks_from_assignment(frames, assignment, first_frame)
 
@@ -318,9 +348,11 @@ def goa_updown(
     Returns
     -------
     Tracks
-        One track per measurement of the first frame; bound slaves interpolated.
+        One track per measurement of the first frame (tracks the up pass lost may be replaced,
+        and more added, by tracks that the down pass starts in the last frame; see
+        ``GOAConfig.restart_lost``); bound slaves interpolated.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     if len(frames) < 2:
         assignment = np.arange(frames[0].shape[0])[:, None] if frames else np.empty((0, 0), np.int64)
         return tracks_from_assignment(frames, assignment, first_frame)
@@ -328,7 +360,7 @@ def goa_updown(
     if progress is not None:
         progress(1)
     backwards = frames[::-1]
-    down = goa_pass(backwards, up[:, ::-1][:, :2], config, progress)
+    down = goa_pass(backwards, _down_start(frames, up, config), config, progress)
     if progress is not None:
         progress(1)
     return tracks_from_assignment(frames, down[:, ::-1], first_frame)

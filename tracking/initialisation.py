@@ -17,6 +17,13 @@ from scipy.spatial import cKDTree
 
 from .motion import IndividualModel, smooth_motion_cost
 
+# Cost of a slave on a first-link path, as a share of phi_max.
+_SLAVE_SHARE = 0.15
+# Points nearest a path's predicted position that may continue it.
+_CONTINUATIONS = 3
+# Weight of the first link's own IM1 cost in its score: small enough only to break ties.
+_TIE_BREAK = 1e-6
+
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All (origin, point) index pairs with the point within the origin's radius."""
@@ -37,6 +44,7 @@ def first_links(
     d_min: float,
     neighbours: int,
     lookahead: int,
+    slave_cost: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate links from frame 0 to frame 1, each scored by its smoothest continuation.
 
@@ -58,6 +66,12 @@ def first_links(
         Candidates per frame-0 point when d_max is None.
     lookahead : int
         Frames the path spans, the first link's two included (3 scores by one triplet).
+    slave_cost : float, optional
+        Cost of a path step that skips a missed point: the path may pass one frame at a time
+        through the position its velocity predicts, as a slave does. Default 0.15 phi_max
+        (the best of 0.03 to 0.25 on occluded PSMG scenes): without it a point missed early
+        makes its true first link look rough (phi_max per missing step), and at high speed a
+        chain of unrelated points that IM2, being scale free, finds smooth wins instead.
 
     Returns
     -------
@@ -68,6 +82,8 @@ def first_links(
     """
     if model.order == 1:
         model = IndividualModel("im2")
+    if slave_cost is None:
+        slave_cost = _SLAVE_SHARE * phi_max
     horizon = min(lookahead, len(frames))
     head, measurement = _first_candidates(frames[0], frames[1], d_max, neighbours)
     velocity = frames[1][measurement] - frames[0][head]
@@ -76,50 +92,49 @@ def first_links(
     if d_max is not None:
         valid &= speed <= d_max
     head, measurement = head[valid], measurement[valid]
+    # IM1: dividing first keeps the fastest link at exactly phi_max, not a rounding step above.
+    nearest = phi_max * (speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)))
     if horizon < 3:
-        cost = phi_max * speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0))
-        return head, measurement, cost
+        return head, measurement, nearest
 
     # Links of each step, as (from, to) index pairs; triplets chain link a of step k to
     # link b of step k + 1 with a.to == b.from.
     links = [(head, measurement)]
     triplets: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    # Each frame's points followed by the slaves (predicted positions) that paths put there.
+    points = [np.asarray(f, dtype=float) for f in frames[:horizon]]
     for step in range(1, horizon - 1):
         origin, target = links[-1]
-        start, middle = frames[step - 1][origin], frames[step][target]
-        unique_middle, inverse = np.unique(target, return_inverse=True)
+        start, middle = points[step - 1][origin], points[step][target]
         move = middle - start
-        move_speed = np.hypot(*move.T)
-        radius = model.gate_radius(move_speed, np.ones(move_speed.size, bool), phi_max)
-        if d_max is not None:
-            radius = np.minimum(radius, d_max)
-        radius = np.where(np.isfinite(radius), radius, np.inf)
-        # One KD query per distinct middle point, with the largest radius any link into it needs.
-        widest = np.zeros(unique_middle.size)
-        np.maximum.at(widest, inverse, radius)
-        widest = np.where(np.isfinite(widest), widest, _extent(frames[step + 1]))
-        owner, nxt = pairs_within(frames[step][unique_middle], widest, frames[step + 1])
-        # Expand to (incoming link, next point) for every incoming link through that middle.
-        order = np.argsort(inverse, kind="stable")
-        per_middle = np.bincount(inverse, minlength=unique_middle.size)
-        first_in = np.concatenate(([0], np.cumsum(per_middle)[:-1]))
-        per_owner = per_middle[owner]
-        link_in = order[np.repeat(first_in[owner], per_owner) + _ranges(per_owner)]
-        point_out = np.repeat(nxt, per_owner)
-        middle_index = np.repeat(unique_middle[owner], per_owner)
-        next_velocity = frames[step + 1][point_out] - frames[step][middle_index]
+        # A smooth continuation lies near the straight-line prediction, so each link looks at
+        # the points nearest to it (exact gating by IM2 alone would reach far for fast links).
+        k = min(_CONTINUATIONS, frames[step + 1].shape[0])
+        if k and origin.size:
+            _, nearest_next = cKDTree(frames[step + 1]).query(middle + move, k=k)
+            point_out = np.asarray(nearest_next).reshape(-1, k).ravel()
+        else:
+            point_out = np.empty(0, np.int64)
+        link_in = np.repeat(np.arange(origin.size), k)
+        middle_index = target[link_in]
+        next_velocity = frames[step + 1][point_out] - middle[link_in]
         next_speed = np.hypot(*next_velocity.T)
         triplet_cost = smooth_motion_cost(move[link_in], next_velocity, model.w1, model.w2)
         ok = (triplet_cost <= phi_max) & (next_speed >= d_min)
         if d_max is not None:
             ok &= next_speed <= d_max
-        # Keep each incoming link's ``neighbours`` smoothest continuations: without a cap the
-        # links multiply with every step where points are dense (a hundred million triplets
-        # on 500 beads a frame), and a path through a rougher triplet does not win anyway.
-        ok &= _cheapest_per_group(link_in, np.where(ok, triplet_cost, np.inf), neighbours)
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
-        out_links, link_out = np.unique(np.column_stack((middle_index, point_out)), axis=0, return_inverse=True)
-        links.append((out_links[:, 0], out_links[:, 1]))
+        # A link into a measured point may go on through a slave; one slave in a row at most.
+        into_measured = np.flatnonzero(target < frames[step].shape[0])
+        slaves = frames[step + 1].shape[0] + np.arange(into_measured.size)
+        points[step + 1] = np.concatenate((points[step + 1], middle[into_measured] + move[into_measured]))
+        link_in = np.concatenate((link_in, into_measured))
+        point_out = np.concatenate((point_out, slaves))
+        middle_index = np.concatenate((middle_index, target[into_measured]))
+        triplet_cost = np.concatenate((triplet_cost, np.full(into_measured.size, slave_cost)))
+        width = points[step + 1].shape[0]
+        out_links, link_out = np.unique(middle_index * width + point_out, return_inverse=True)
+        links.append((out_links // width, out_links % width))
         triplets.append((link_in, link_out.ravel(), triplet_cost))
 
     # Backward dynamic programme: cheapest remaining path cost from each link.
@@ -130,9 +145,11 @@ def first_links(
         best = np.full(links[step][0].size, missing)
         np.minimum.at(best, link_in, triplet_cost + to_go[link_out])
         to_go = best
-    # The mean of costs within phi_max is within phi_max; clipping keeps rounding from pruning
-    # a link whose path cannot be continued at all (e.g. across a frame without points).
-    return head, measurement, np.minimum(to_go / len(triplets), phi_max)
+    # Paths that end alike (e.g. through slaves) tie; the shorter first link then wins, so that
+    # the choice does not depend on the order of the measurements. The mix of two costs within
+    # phi_max is within phi_max; clipping keeps rounding from pruning a link at the limit.
+    cost = (1 - _TIE_BREAK) * to_go / len(triplets) + _TIE_BREAK * nearest
+    return head, measurement, np.minimum(cost, phi_max)
 
 
 def _first_candidates(
@@ -146,27 +163,3 @@ def _first_candidates(
     _, index = cKDTree(second).query(first, k=k)
     index = np.asarray(index).reshape(first.shape[0], k)
     return np.repeat(np.arange(first.shape[0]), k), index.ravel()
-
-
-def _cheapest_per_group(group: np.ndarray, cost: np.ndarray, count: int) -> np.ndarray:
-    """Boolean mask of the ``count`` cheapest items of each group (ties by position)."""
-    order = np.lexsort((np.arange(group.size), cost, group))
-    sorted_group = group[order]
-    starts = np.flatnonzero(np.r_[True, sorted_group[1:] != sorted_group[:-1]]) if group.size else np.empty(0, np.int64)
-    sizes = np.diff(np.r_[starts, group.size])
-    rank = np.arange(group.size) - np.repeat(starts, sizes)
-    kept = np.zeros(group.size, bool)
-    kept[order[rank < count]] = True
-    return kept
-
-
-def _extent(points: np.ndarray) -> float:
-    """A radius that reaches every point of the frame from anywhere inside its bounding box."""
-    return float(np.hypot(*np.ptp(points, axis=0))) + 1.0 if len(points) else 1.0
-
-
-def _ranges(counts: np.ndarray) -> np.ndarray:
-    """Concatenated ``arange(c)`` for each c in counts."""
-    total = int(counts.sum())
-    starts = np.repeat(np.cumsum(counts) - counts, counts)
-    return np.arange(total) - starts

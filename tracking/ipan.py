@@ -26,7 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .motion import smooth_motion_cost
-from .tracks import Tracks, tracks_from_links
+from .tracks import Tracks, check_limit, point_frames, tracks_from_links
 
 FREE = -1
 
@@ -63,8 +63,7 @@ class IPANConfig:
     w2: float = 0.9
 
     def __post_init__(self) -> None:
-        if not self.v_max > 0:
-            raise ValueError(f"v_max must be positive, got {self.v_max}")
+        check_limit("v_max", self.v_max, optional=False)
         if not 0 < self.delta_max < 1:
             raise ValueError(f"delta_max must lie in (0, 1), got {self.delta_max}")
         if self.n_ver < 1:
@@ -289,7 +288,7 @@ def ipan(frames: Sequence[np.ndarray], config: IPANConfig, first_frame: int = 0)
         One track per linked chain; bridged gaps are filled on straight lines; unlinked points
         are one-point tracks.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     linker = _Linker(frames, config)
     for k in range(1, len(frames) - 1):
         linker.process(k)

@@ -25,7 +25,7 @@ import numpy as np
 from .assignment import UNASSIGNED
 from .gap_closing import close_gaps
 from .goa import GOAConfig, Progress, _HeadState, assign_step, goa_pass, initial_links
-from .initialisation import _extent, pairs_within
+from .initialisation import pairs_within
 from .motion import Candidates
 from .tracks import Tracks, tracks_from_assignment
 
@@ -122,8 +122,7 @@ def _continues(origin: np.ndarray, velocity: np.ndarray, after: Sequence[np.ndar
     if config.d_max is not None:
         radius = np.minimum(radius, config.d_max)
     for gap, points in enumerate(after, start=1):
-        reach = np.where(np.isfinite(radius), radius * gap, _extent(points))
-        owner, target = pairs_within(origin, reach, points)
+        owner, target = pairs_within(origin, radius * gap, points)
         pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner])
         speed_out = np.hypot(*pairs.velocity.T)
         scale = config.d_max if config.d_max is not None else max(float(speed_out.max(initial=0.0)), 1.0)

@@ -41,16 +41,36 @@ def match_points(result: Tracks, truth: Tracks, tolerance: float) -> np.ndarray:
         theirs = np.flatnonzero(truth.present[:, truth_column])
         if ours.size == 0 or theirs.size == 0:
             continue
-        a = result.xy[ours, column]
-        b = truth.xy[theirs, truth_column]
-        distance = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
-        # Pairs beyond the tolerance must never be chosen, and a finite stand-in keeps the
-        # problem feasible; any pair beyond it is discarded afterwards.
-        cost = np.where(distance <= tolerance, distance, 1e6 + tolerance)
-        rows, cols = linear_sum_assignment(cost)
-        good = distance[rows, cols] <= tolerance
-        matched[ours[rows[good]], column] = theirs[cols[good]]
+        rows, cols = match_frame(result.xy[ours, column], truth.xy[theirs, truth_column], tolerance)
+        matched[ours[rows], column] = theirs[cols]
     return matched
+
+
+def match_frame(found: np.ndarray, true: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """One-to-one matches of found to true points of one frame, within ``tolerance``, that
+    minimise the summed distance.
+
+    Parameters
+    ----------
+    found, true : ndarray, shape (n, 2) and (m, 2)
+        Positions, pixels.
+    tolerance : float
+        Largest distance of a match, pixels.
+
+    Returns
+    -------
+    rows, cols : ndarray of int
+        ``found[rows[i]]`` matches ``true[cols[i]]``.
+    """
+    if len(found) == 0 or len(true) == 0:
+        return np.empty(0, int), np.empty(0, int)
+    distance = np.hypot(found[:, None, 0] - true[None, :, 0], found[:, None, 1] - true[None, :, 1])
+    # Pairs beyond the tolerance must never be chosen, and a finite stand-in keeps the
+    # problem feasible; any pair beyond it is discarded afterwards.
+    cost = np.where(distance <= tolerance, distance, 1e6 + tolerance)
+    rows, cols = linear_sum_assignment(cost)
+    good = distance[rows, cols] <= tolerance
+    return rows[good], cols[good]
 
 
 def true_track_owners(matched: np.ndarray, result: Tracks, truth: Tracks) -> np.ndarray:

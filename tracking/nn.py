@@ -14,7 +14,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .assignment import UNASSIGNED, solve_split
 from .initialisation import pairs_within
-from .tracks import Tracks, tracks_from_links
+from .tracks import Tracks, check_limit, point_frames, tracks_from_links
 
 
 def link_nearest(before: np.ndarray, after: np.ndarray, d_max: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -68,7 +68,8 @@ def nearest_neighbour(
     Tracks
         One track per chain of links; unlinked points are one-point tracks.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
+    d_max = check_limit("d_max", d_max)
     links = []
     for k in range(len(frames) - 1):
         rows, columns = link_nearest(frames[k], frames[k + 1], d_max)

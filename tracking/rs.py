@@ -17,7 +17,7 @@ import numpy as np
 
 from .motion import Candidates, proximal_uniformity_cost
 from .nn import link_nearest
-from .tracks import NO_MEASUREMENT, Tracks
+from .tracks import NO_MEASUREMENT, Tracks, check_limit, point_frames
 
 
 def greedy_conditioned_assignment(cost: np.ndarray) -> np.ndarray:
@@ -91,7 +91,8 @@ def rangarajan_shah(
         One track per head. Frames where a head found no measurement hold its extrapolated
         position, marked as interpolated.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
+    d_max = check_limit("d_max", d_max)
     n_frames = len(frames)
     if initial is None:
         heads = np.arange(frames[0].shape[0]) if frames else np.empty(0, np.int64)

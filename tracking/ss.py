@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from .motion import smooth_motion_cost
-from .tracks import Tracks, tracks_from_links
+from .tracks import Tracks, check_limit, point_frames, tracks_from_links
 
 # The cost of a triplet that breaks a constraint: large enough that removing one always pays
 # more than any sum of allowed costs, small enough that gains stay exact in float64.
@@ -56,7 +56,8 @@ def sethi_jain(
     Tracks
         One track per run of real points in a slot; gaps are not bridged.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
+    phi_max, d_max = check_limit("phi_max", phi_max, optional=False), check_limit("d_max", d_max)
     largest = max((f.shape[0] for f in frames), default=0)
     slots = largest + (largest if spare_slots is None else spare_slots)
     exchange = _Exchange(frames, _initial_slots(frames, slots, d_max), phi_max, d_max, w1, w2)

@@ -17,11 +17,7 @@ from .lifecycle import LifecycleConfig, goa_updown_open
 from .nn import nearest_neighbour
 from .rs import rangarajan_shah
 from .ss import sethi_jain
-from .tracks import Tracks
-
-# An estimated speed limit leaves this much room above the fastest links GOA-updown makes.
-_SPEED_MARGIN = 1.5
-_SPEED_PERCENTILE = 99
+from .tracks import Tracks, link_speed_limit
 
 
 @dataclass(frozen=True)
@@ -54,11 +50,7 @@ def estimate_speed_limit(frames: Sequence[np.ndarray]) -> float:
     float
         Pixels/frame; 1.0 when there are no links to measure.
     """
-    tracks = goa_updown(frames)
-    measured = tracks.measurement != -1
-    both = measured[:, 1:] & measured[:, :-1]
-    speed = np.hypot(*np.diff(tracks.xy, axis=1)[both].T)
-    return float(_SPEED_MARGIN * np.percentile(speed, _SPEED_PERCENTILE)) if speed.size and speed.max() > 0 else 1.0
+    return link_speed_limit(goa_updown(frames))
 
 
 def _ipan(frames, max_speed, first_frame):
@@ -71,8 +63,8 @@ TRACKERS: dict[str, Tracker] = {
     for t in (
         Tracker(
             "goa-updown",
-            "GOA-updown with track initiation and termination: tracks open from leftover points confirmed "
-            "over five frames, end after 10 missed frames, and are joined across gaps of up to 10 frames",
+            "GOA-updown with track initiation and termination: tracks open from leftover points measured in three "
+            "frames in a row, end after 10 missed frames, and are joined across gaps of up to 10 frames",
             lambda frames, max_speed, first: goa_updown_open(frames, GOAConfig(d_max=max_speed), LifecycleConfig(), first),
         ),
         Tracker(

@@ -12,6 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 NO_MEASUREMENT = -1
+# A speed limit estimated from tracks leaves this much room above their fastest links.
+_SPEED_MARGIN = 1.5
+_SPEED_PERCENTILE = 99
 
 
 @dataclass(frozen=True)
@@ -212,3 +215,59 @@ def tracks_from_links(
         more = successor[current] >= 0
         row, current = row[more], successor[current[more]]
     return tracks_from_assignment(frames, assignment, first_frame)
+
+
+def link_speed_limit(tracks: Tracks) -> float:
+    """A speed limit that the measured links of ``tracks`` suggest: 1.5 times their 99th percentile.
+
+    Returns
+    -------
+    float
+        Pixels/frame; 1.0 when there are no links to measure.
+    """
+    measured = tracks.measurement != NO_MEASUREMENT
+    both = measured[:, 1:] & measured[:, :-1]
+    speed = np.hypot(*np.diff(tracks.xy, axis=1)[both].T)
+    return float(_SPEED_MARGIN * np.percentile(speed, _SPEED_PERCENTILE)) if speed.size and speed.max() > 0 else 1.0
+
+
+def point_frames(frames) -> list[np.ndarray]:
+    """The measurements every tracker takes: one float array of shape (M_k, 2) per frame.
+
+    Parameters
+    ----------
+    frames : sequence of array-like
+        Positions (x, y) per frame, pixels; an empty frame may have any empty shape.
+
+    Raises
+    ------
+    ValueError
+        If a frame is not a list of (x, y) pairs or holds a non-finite position.
+    """
+    out = []
+    for k, frame in enumerate(frames):
+        points = np.asarray(frame, dtype=float)
+        if points.size == 0:
+            points = points.reshape(0, 2)
+        if points.ndim != 2 or points.shape[1] != 2:
+            raise ValueError(f"frame {k} must hold (x, y) pairs, got shape {points.shape}")
+        if not np.isfinite(points).all():
+            raise ValueError(f"frame {k} holds a non-finite position")
+        out.append(points)
+    return out
+
+
+def check_limit(name: str, value: float | None, optional: bool = True) -> float | None:
+    """``value`` as a float when it is a positive limit (None passes when ``optional``).
+
+    Raises
+    ------
+    ValueError
+        Naming the limit, if it is not positive (or None where one is required).
+    """
+    if value is None and optional:
+        return None
+    if value is None or not float(value) > 0:
+        raise ValueError(f"{name} must be positive, got {value}")
+    return float(value)
+

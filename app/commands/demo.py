@@ -7,11 +7,10 @@ from pathlib import Path
 
 from data.dish import DishSpec, write_dish_clip
 from data.trackfile import read_tracks
-from detection.blobs import BlobOptions
 from tracking.metrics import score_tracks
 
 from ..errors import UsageError
-from ..pipeline import prepare_output_folder, run_pipeline
+from ..pipeline import DetectionSettings, prepare_output_folder, run_pipeline
 from .run import add_tracker_options, lifecycle_config, tracker_config
 
 
@@ -52,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     prepare_output_folder(args.out)
     scene = write_dish_clip(spec, args.out)
-    run_pipeline(args.out / "clip.mp4", args.out, BlobOptions(), config, lifecycle, args.min_length)
+    run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length)
     result = read_tracks(args.out / "tracks.csv")
     scores = score_tracks(result, scene.truth, args.tol)
     print(

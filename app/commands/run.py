@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from detection.blobs import BlobOptions
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig
 
 from ..errors import UsageError
 from ..pipeline import run_pipeline
+from .detect import add_detection_options, detection_settings
 
 
 def add_tracker_options(parser: argparse.ArgumentParser) -> None:
@@ -97,13 +97,15 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
+    add_detection_options(parser)
     add_tracker_options(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    settings = detection_settings(args)
     config, lifecycle = tracker_config(args), lifecycle_config(args)
-    detections, tracks = run_pipeline(args.input, args.out, BlobOptions(), config, lifecycle, args.min_length)
+    detections, tracks = run_pipeline(args.input, args.out, settings, config, lifecycle, args.min_length)
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
         f"{len(detections.columns)} frames, {measured} detections, {tracks.n_tracks} tracks; "

@@ -23,7 +23,12 @@ from ..progress import progress_bar
 from .run import add_tracker_options, lifecycle_config
 
 POINT_COLUMNS = ("frame", "x", "y")
-FIRST_LINKS = {"lookahead": "lookahead", "nearest": "im1"}
+# How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
+FIRST_LINKS = {
+    "lookahead": {},
+    "nearest": {"initialisation": "im1"},
+    "paper": {"initialisation": "im1", "restart_lost": False},
+}
 # Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
 _GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
 _GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links")
@@ -43,15 +48,17 @@ rows. Points are sorted by (frame, x, y) before tracking, so the order of the ro
 
 Algorithms: goa-updown (default) tracks forwards, then backwards in time, and lets tracks come and
 go: at each frame the running tracks take their points first (GOA's optimal assignment, with slaves
-for missed points), then the points left over open new tracks when they chain smoothly over the
-next five frames, so that a false point does not open one. A track ends after --max-gap missed
+for missed points), then the points left over open new tracks when they chain smoothly over three
+frames in a row, so that a false point does not open one. A track ends after --max-gap missed
 frames in a row; afterwards a track end is joined to a later track start when the motion model says
 they are one object. Gaps inside a track are filled by interpolation (interpolated=1).
-goa-updown-fixed (or goa-updown --fixed-count) is GOA-updown as published: it initialises itself
-and keeps one track per point of the first frame. goa is the paper's single forward pass from given
-first links; here they are the links between the first two frames that --first-links chooses. nn,
-ss, rs and ipan are the paper's comparison trackers; they start and end tracks anywhere and take
-only --max-speed. --min-length applies to every algorithm.
+goa-updown-fixed (or goa-updown --fixed-count) is GOA-updown as published: it initialises itself,
+tracks forwards, then backwards from the forward pass's last links (and from last-frame points the
+forward pass lost, see --first-links), one track per point of the first frame. goa is the paper's
+single forward pass from given first links; here they are the links between the first two frames
+that --first-links chooses. Points no track takes are left out. nn, ss, rs and ipan are the paper's
+comparison trackers; they start and end tracks anywhere and take only --max-speed. --min-length
+applies to every algorithm.
 
 Without --max-speed there is no speed limit: the smoothness limit --phi-max bounds a moving point
 and the first links are chosen among each point's nearest neighbours, which suits data whose speed
@@ -95,8 +102,11 @@ def add_parser(subparsers) -> None:
         "--first-links",
         choices=tuple(FIRST_LINKS),
         default=None,
-        help="first links (frames 1-2): lookahead (default) scores each by the smoothest path it starts over "
-        "the next five frames; nearest is the paper's optimal nearest-neighbour assignment",
+        help="how tracks start: lookahead (default) scores each first link by the smoothest path it starts "
+        "over the next five frames, and GOA-updown's backward pass also starts tracks from last-frame points "
+        "its forward pass lost; nearest takes the first links by optimal nearest-neighbour assignment, as the "
+        "paper does; paper is nearest with the paper's backward pass, which starts only from the forward "
+        "pass's last links",
     )
     # phi_max left unset tells a GOA option given to another tracker from one left at its default.
     parser.set_defaults(run=run, phi_max=None)
@@ -160,7 +170,7 @@ def goa_config(args: argparse.Namespace) -> GOAConfig:
         "individual": IndividualModel(args.individual_model or "im2"),
         "combined": CombinedModel(args.combined_model or "cm1"),
         "d_max": args.max_speed,
-        "initialisation": FIRST_LINKS[args.first_links or "lookahead"],
+        **FIRST_LINKS[args.first_links or "lookahead"],
     }
     if args.phi_max is not None:
         options["phi_max"] = args.phi_max

@@ -1,0 +1,105 @@
+"""``seedtrack compare INPUT A B --out OUT``: two track sets over one clip, their disagreements in a warning colour."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from data.trackfile import FORMATS, read_tracks
+from tracking.metrics import UNMATCHED, match_points
+from tracking.tracks import Tracks
+
+from ..errors import UsageError
+from ..frame_output import write_frames
+from ..render import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate
+from .render import add_view_options, check_view_options, open_range
+
+DEFAULT_TOLERANCE = 3.0
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "compare",
+        help="draw two track sets over the clip, where they disagree in a warning colour",
+        description="Draw track sets A and B (truth and result, or two trackers; any track format) over INPUT, side by "
+        "side or overlaid. Points of the two sets are matched frame by frame within --tol; a link of one set "
+        "(frame k to k+1) disagrees with the other set when its two points are not matched to one and the same "
+        "track there, and is drawn in yellow.",
+    )
+    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("a", type=Path, metavar="A", help="first track set (csv, trackpy csv, MOT txt, TrackMate or ISBI xml), drawn blue")
+    parser.add_argument("b", type=Path, metavar="B", help="second track set, drawn vermillion")
+    add_view_options(parser)
+    parser.add_argument("--tol", type=float, default=DEFAULT_TOLERANCE, metavar="PX", help=f"matching distance in pixels (default {DEFAULT_TOLERANCE:g})")
+    layout = parser.add_mutually_exclusive_group()
+    layout.add_argument("--side-by-side", dest="overlay", action="store_false", help="A on the left, B on the right (default)")
+    layout.add_argument("--overlay", dest="overlay", action="store_true", help="A and B drawn over the same frame")
+    parser.add_argument("--format-a", choices=sorted(FORMATS), default=None, help="format of A (default: from the extension and contents)")
+    parser.add_argument("--format-b", choices=sorted(FORMATS), default=None, help="format of B (default: from the extension and contents)")
+    parser.set_defaults(run=run, overlay=False)
+
+
+def disagreeing_links(tracks: Tracks, other: Tracks, tolerance: float) -> np.ndarray:
+    """Links of ``tracks`` that ``other`` does not make.
+
+    Parameters
+    ----------
+    tracks, other : Tracks
+        Frames aligned by their 0-based frame indices.
+    tolerance : float
+        Matching distance, pixels (points matched one to one per frame, optimal assignment).
+
+    Returns
+    -------
+    ndarray of bool, shape (tracks.n_tracks, tracks.n_frames)
+        True at column c when the track has points at c - 1 and c and they are not both matched
+        to the same track of ``other``.
+    """
+    matched = match_points(tracks, other, tolerance)
+    present = tracks.present
+    differ = (matched[:, 1:] != matched[:, :-1]) | (matched[:, 1:] == UNMATCHED)
+    warnings = np.zeros(present.shape, bool)
+    warnings[:, 1:] = present[:, 1:] & present[:, :-1] & differ
+    return warnings
+
+
+def run(args: argparse.Namespace) -> int:
+    kind = check_view_options(args)
+    if not args.tol > 0:
+        raise UsageError(f"--tol must be > 0, got {args.tol:g}")
+    a = read_tracks(args.a, args.format_a)
+    b = read_tracks(args.b, args.format_b)
+    warnings_a = disagreeing_links(a, b, args.tol)
+    warnings_b = disagreeing_links(b, a, args.tol)
+    with open_range(args, kind, [(args.a, a), (args.b, b)]) as source:
+        view = View.of(source.size, args.crop, args.scale)
+        layer_a = TrackLayer(a, view, trail=args.trail, labels=args.labels, colour=COMPARE_A_BGR, warnings=warnings_a)
+        layer_b = TrackLayer(b, view, trail=args.trail, labels=args.labels, colour=COMPARE_B_BGR, warnings=warnings_b)
+        legend_a = ("line", COMPARE_A_BGR, f"A: {args.a.name}")
+        legend_b = ("line", COMPARE_B_BGR, f"B: {args.b.name}")
+        warning = ("line", WARNING_BGR, "link the other lacks")
+        if args.overlay:
+            frames = ((index, annotate(image, index, view, [layer_a, layer_b], legend=[legend_a, legend_b, warning])) for index, image in source)
+        else:
+            frames = _side_by_side(source, view, (layer_a, [legend_a, warning]), (layer_b, [legend_b, warning]))
+        count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
+    print(
+        f"wrote {args.out}: {count} frames; links disagreeing within {args.tol:g} px: "
+        f"A {int(warnings_a.sum())} of {_links(a)}, B {int(warnings_b.sum())} of {_links(b)}"
+    )
+    return 0
+
+
+def _links(tracks: Tracks) -> int:
+    present = tracks.present
+    return int((present[:, 1:] & present[:, :-1]).sum())
+
+
+def _side_by_side(source, view: View, left, right):
+    """Yield ``(frame_index, A panel | gap | B panel)`` for every frame of ``source``."""
+    gap = np.zeros((view.size[1], max(2, view.size[0] // 200), 3), np.uint8)
+    for index, image in source:
+        panels = [annotate(image, index, view, [layer], legend=legend, title=f"{name} ") for (layer, legend), name in ((left, "A"), (right, "B"))]
+        yield index, np.hstack([panels[0], gap, panels[1]])

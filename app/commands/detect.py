@@ -1,0 +1,218 @@
+"""``seedtrack detect INPUT --out detections.csv``: measure objects in every frame, no tracking.
+
+The detection options are defined here once and shared by every command that detects.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from data.atomic import atomic_path
+from data.csvio import write_table
+from data.errors import DataError
+from data.frames import IMAGE_SUFFIXES
+from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
+from detection.roi import Circle
+
+from ..errors import UsageError
+from ..render import SHIFT, draw_text, to_fixed
+from ..pipeline import DETECTORS, DetectionSettings, detect_clip
+from ..review import review_zoom
+
+_CIRCLE = re.compile(r"^\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*$")
+_FOUND_BGR = (0, 0, 255)
+_ROI_BGR = (0, 200, 0)
+
+
+def add_detection_options(parser: argparse.ArgumentParser) -> None:
+    """Options of the detector and of the frames read, shared by every command that detects."""
+    defaults = BlobOptions()
+    group = parser.add_argument_group("detection")
+    group.add_argument(
+        "--detector",
+        choices=sorted(DETECTORS),
+        default="blob",
+        help="blob: threshold and connected pixels (fast, any shape); log: Laplacian of Gaussian for small "
+        "round spots, particles and beads (slower) (default blob)",
+    )
+    group.add_argument(
+        "--polarity",
+        choices=POLARITIES,
+        default=defaults.polarity,
+        help="objects darker or lighter than the background; auto decides on the first frame (default auto)",
+    )
+    group.add_argument(
+        "--background",
+        choices=BACKGROUNDS,
+        default=defaults.background,
+        help="what contrast is measured against: local, a median over --background-size windows (uneven "
+        "light); none, the frame's median grey; temporal, the per-pixel median over the clip (static "
+        "camera and scene) (default local)",
+    )
+    group.add_argument(
+        "--background-size",
+        type=float,
+        default=defaults.background_size,
+        metavar="PX",
+        help=f"window of the local background, pixels; well above an object's size (default {defaults.background_size:g})",
+    )
+    group.add_argument(
+        "--threshold",
+        default=defaults.threshold,
+        metavar="otsu|adaptive|N",
+        help="object pixels: otsu, Otsu's level among pixels above the noise; adaptive, local mean + 3 local "
+        "standard deviations; N, a contrast of at least N grey levels (default otsu)",
+    )
+    group.add_argument("--min-area", type=float, default=defaults.min_area_px, metavar="PX", help=f"smallest object, pixels (default {defaults.min_area_px:g})")
+    group.add_argument("--max-area", type=float, default=None, metavar="PX", help="largest object, pixels (default 1%% of the frame)")
+    group.add_argument(
+        "--roi",
+        default="auto",
+        metavar="auto|none|X,Y,R|MASK.png",
+        help="where to look: auto, the dish if the frame clearly shows a large bright disc, else everywhere; "
+        "none, everywhere; X,Y,R a circle in pixels; or a mask image of the frames' size, nonzero inside (default auto)",
+    )
+    group.add_argument(
+        "--split",
+        action=argparse.BooleanOptionalAction,
+        default=defaults.split,
+        help="split blobs of touching objects (default on)",
+    )
+    frames = parser.add_argument_group("frames")
+    frames.add_argument("--start", type=int, default=0, metavar="F", help="first 0-based frame (default 0)")
+    frames.add_argument("--end", type=int, default=None, metavar="F", help="0-based frame to stop before (default: the end)")
+    frames.add_argument("--step", type=int, default=1, metavar="N", help="every Nth frame (default 1)")
+
+
+def detection_settings(args: argparse.Namespace) -> DetectionSettings:
+    """The detection settings the options ask for.
+
+    Raises
+    ------
+    UsageError
+        If the options make no sense.
+    """
+    threshold: str | float = args.threshold
+    if threshold not in ("otsu", "adaptive"):
+        try:
+            threshold = float(threshold)
+        except ValueError:
+            raise UsageError(f"--threshold must be otsu, adaptive or a number of grey levels, got {args.threshold!r}") from None
+    if threshold == "adaptive" and args.detector == "log":
+        raise UsageError("--threshold adaptive works with --detector blob only")
+    try:
+        options = BlobOptions(
+            polarity=args.polarity,
+            background=args.background,
+            background_size=args.background_size,
+            threshold=threshold,
+            min_area_px=args.min_area,
+            max_area_px=args.max_area,
+            split=args.split,
+        )
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    for name in ("start", "end", "step"):
+        value = getattr(args, name)
+        if value is not None and value < (1 if name == "step" else 0):
+            raise UsageError(f"--{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}")
+    if args.end is not None and args.end <= args.start:
+        raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
+    return DetectionSettings(options, args.detector, _roi(args.roi), args.start, args.end, args.step)
+
+
+def _roi(text: str) -> str | Circle | Path:
+    if text in ("auto", "none"):
+        return text
+    circle = _CIRCLE.match(text)
+    if circle:
+        x, y, r = (float(value) for value in circle.groups())
+        if not all(np.isfinite((x, y, r))) or r <= 0:
+            raise UsageError(f"--roi circle needs finite X,Y and a radius > 0, got {text!r}")
+        return Circle(x, y, r)
+    return Path(text)
+
+
+def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndarray | None, circle: Circle | None, frame_index: int) -> np.ndarray:
+    """The frame enlarged, each detection ringed in red at its size and the region of interest
+    outlined in green, with the frame index and the count written in the corner.
+
+    Returns
+    -------
+    ndarray of uint8, shape (zoom * H, zoom * W, 3) BGR
+    """
+    zoom = review_zoom(frame.shape[1])
+    page = cv2.resize(frame, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_NEAREST)
+
+    def at(points: np.ndarray) -> np.ndarray:
+        # Pixel centres sit at integer coordinates: pixel c covers [c - 0.5, c + 0.5).
+        return to_fixed((points + 0.5) * zoom - 0.5)
+
+    if circle is not None:
+        centre = at(np.array([circle.x, circle.y]))
+        cv2.circle(page, tuple(int(c) for c in centre), int(round(circle.r * zoom * (1 << SHIFT))), _ROI_BGR, 1, cv2.LINE_AA, SHIFT)
+    elif roi is not None:
+        outline, _ = cv2.findContours((roi > 0).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        cv2.drawContours(page, [c * zoom + zoom // 2 for c in outline], -1, _ROI_BGR, 1, cv2.LINE_AA)
+    centres = at(np.column_stack((columns["x"], columns["y"])))
+    radii = np.round((np.sqrt(columns["area"] / np.pi) + 1.5) * zoom * (1 << SHIFT)).astype(int)
+    for (x, y), r in zip(centres, radii):
+        cv2.circle(page, (int(x), int(y)), int(r), _FOUND_BGR, 1, cv2.LINE_AA, SHIFT)
+    draw_text(page, f"frame {frame_index}: {len(columns['x'])} found", (8, 24), (255, 255, 255), 0.7, 1)
+    return page
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "detect",
+        help="measure objects in every frame (detections.csv), with a preview image to tune the options",
+        description="Find objects in every frame of INPUT and write OUT (CSV: frame,x,y,area,mean_intensity,"
+        "eccentricity; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates). "
+        "--preview draws what was found and the region of interest on one frame.",
+    )
+    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder, glob pattern or TIFF stack")
+    parser.add_argument("--out", type=Path, required=True, metavar="detections.csv", help="output CSV")
+    parser.add_argument("--preview", type=Path, default=None, metavar="PNG", help="write a preview image of one frame")
+    parser.add_argument("--preview-frame", type=int, default=None, metavar="F", help="0-based frame of the preview (default: the first processed)")
+    add_detection_options(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    settings = detection_settings(args)
+    preview_frame = None
+    if args.preview is not None:
+        preview_frame = args.preview_frame if args.preview_frame is not None else settings.start
+        if args.preview.suffix.lower() not in IMAGE_SUFFIXES:
+            raise UsageError(f"--preview {args.preview}: name an image file ({', '.join(IMAGE_SUFFIXES)})")
+    elif args.preview_frame is not None:
+        raise UsageError("--preview-frame needs --preview PNG")
+    # Found out now rather than after a long clip has been read.
+    for target in (args.out, args.preview):
+        if target is not None and not target.parent.is_dir():
+            raise DataError(target, f"folder {target.parent} does not exist")
+    found = detect_clip(args.input, settings, preview_frame)
+    rows = found.detections.to_rows()
+    write_table(args.out, rows)
+    frames = len(found.detections.frame_indices)
+    message = (
+        f"{frames} frames ({found.fps:.4g} frames/s), {len(rows['frame'])} detections "
+        f"({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
+    )
+    if args.preview is not None:
+        if found.preview is None:
+            message += f"; no preview: frame {preview_frame} was not read"
+        else:
+            column = int(np.searchsorted(found.detections.frame_indices, preview_frame))
+            page = draw_preview(found.preview, found.detections.columns[column], found.roi, found.circle, preview_frame)
+            with atomic_path(args.preview) as temporary:
+                if not cv2.imwrite(str(temporary), page):
+                    raise DataError(args.preview, "cannot write the preview image")
+            message += f", {args.preview}"
+    print(message)
+    return 0

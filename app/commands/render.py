@@ -1,0 +1,131 @@
+"""``seedtrack render INPUT TRACKS --out OUT``: the clip (or a frame, or a GIF) with the tracks drawn over it."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from data.csvio import read_table
+from data.errors import DataError
+from data.frames import FrameSource, open_frames
+from data.trackfile import FORMATS, read_tracks
+from tracking.tracks import Tracks
+
+from ..error_plot import write_png
+from ..errors import UsageError
+from ..frame_output import output_kind, write_frames
+from ..render import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
+
+DEFAULT_TRAIL = 10
+
+
+def add_view_options(parser: argparse.ArgumentParser) -> None:
+    """The input, output, frame range and drawing options shared by ``render`` and ``compare``."""
+    parser.add_argument(
+        "--out",
+        default=None,
+        metavar="OUT",
+        help="output: .mp4 (H.264 clip), .gif (animated), .png (one frame, see --frame) or a folder (no extension "
+        "or ending in /: one PNG per frame)",
+    )
+    group = parser.add_argument_group("frames and drawing")
+    group.add_argument("--start", type=int, default=0, metavar="F", help="first 0-based frame to draw (default 0)")
+    group.add_argument("--end", type=int, default=None, metavar="F", help="stop before this frame (default: the end of INPUT)")
+    group.add_argument("--step", type=int, default=1, metavar="N", help="draw every Nth frame (default 1)")
+    group.add_argument("--frame", type=int, default=None, metavar="F", help="the frame a .png output shows (default: the last frame of the tracks)")
+    group.add_argument("--trail", type=int, default=DEFAULT_TRAIL, metavar="N", help=f"past positions in each fading trail (default {DEFAULT_TRAIL})")
+    group.add_argument("--labels", action=argparse.BooleanOptionalAction, default=True, help="write each track's id beside it (default: yes)")
+    group.add_argument("--scale", type=float, default=1.0, metavar="S", help="enlarge (or shrink, below 1) the frames by S (default 1)")
+    group.add_argument("--crop", default=None, metavar="x0,y0,x1,y1", help="draw only this box of the input frame, pixels (x1, y1 exclusive)")
+    group.add_argument("--fps", type=float, default=None, metavar="F", help="frames per second of the output (default: that of INPUT)")
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "render",
+        help="draw tracks over the clip: an MP4, a GIF, a PNG or a folder of PNGs",
+        description="Draw each track over INPUT in its own colour (the same on every run): a fading trail, the id "
+        "beside the head, interpolated positions hollow, starts and ends marked, detections that no track holds "
+        "crossed out (with --detections), a legend and the frame number.",
+    )
+    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
+    add_view_options(parser)
+    parser.add_argument("--summary", type=Path, default=None, metavar="PNG", help="also draw every whole trajectory over the first frame into this PNG")
+    parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): mark those that no track holds")
+    parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    parser.set_defaults(run=run)
+
+
+def check_view_options(args: argparse.Namespace) -> str | None:
+    """The output kind (see :func:`app.frame_output.output_kind`), after checking the options.
+
+    Raises
+    ------
+    UsageError
+        If an option is out of range or no output is asked for.
+    """
+    if args.out is None and getattr(args, "summary", None) is None:
+        raise UsageError("give --out" + (" or --summary" if hasattr(args, "summary") else ""))
+    if args.trail < 0:
+        raise UsageError(f"--trail must be >= 0, got {args.trail}")
+    if args.fps is not None and not args.fps > 0:
+        raise UsageError(f"--fps must be > 0, got {args.fps:g}")
+    kind = output_kind(args.out) if args.out is not None else None
+    if args.frame is not None and kind != "png":
+        raise UsageError("--frame chooses the frame of a .png output; use --start/--end/--step for clips")
+    return kind
+
+
+def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tuple[Path, Tracks]]) -> FrameSource:
+    """Open INPUT over the frames asked for, after checking that the tracks lie within it.
+
+    Raises
+    ------
+    DataError
+        If the input cannot be read, or a track set has frames past its end.
+    """
+    for path, tracks in track_sets:
+        if tracks.n_frames == 0:
+            raise DataError(path, "holds no track points")
+    last_frames = [tracks.first_frame + tracks.n_frames - 1 for _, tracks in track_sets]
+    if kind == "png":
+        frame = args.frame if args.frame is not None else max(last_frames)
+        source = open_frames(args.input, start=frame, end=frame + 1)
+    else:
+        source = open_frames(args.input, start=args.start, end=args.end, step=args.step)
+    length = source.clip_length
+    for (path, tracks), last in zip(track_sets, last_frames):
+        if length is not None and last >= length:
+            source.close()
+            raise DataError(
+                path,
+                f"frames {tracks.first_frame}..{last} lie outside the video {args.input} (frames 0..{length - 1}); "
+                "are these the tracks of this clip?",
+            )
+    return source
+
+
+def run(args: argparse.Namespace) -> int:
+    kind = check_view_options(args)
+    if args.summary is not None and args.summary.suffix.lower() != ".png":
+        raise UsageError(f"--summary must be a .png file, got {args.summary}")
+    tracks = read_tracks(args.tracks, args.format)
+    detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
+    with open_range(args, kind, [(args.tracks, tracks)]) as source:
+        view = View.of(source.size, args.crop, args.scale)
+        layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
+        if args.summary is not None:
+            _, first = next(iter(open_frames(args.input, start=args.start, end=args.start + 1)))
+            write_png(args.summary, summary_picture(first, view, [layer], f"{tracks.n_tracks} tracks"))
+        if kind is None:
+            print(f"wrote {args.summary}")
+            return 0
+        false = None
+        if detections is not None:
+            false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
+        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(false is not None))
+        count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
+    print(f"wrote {args.out}: {count} frames of {tracks.n_tracks} tracks, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else ""))
+    return 0
+

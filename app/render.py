@@ -1,0 +1,526 @@
+"""Tracks drawn over video frames: the overlay of clips, single pictures, summaries and comparisons.
+
+A frame is drawn in three passes: the fading trails of every track (drawn into a colour layer and
+an alpha layer, then blended once where the alpha is not zero, which keeps the per-frame cost
+proportional to what is drawn rather than to the frame size), then the heads, start and end marks
+and ids, then the legend and frame counter. Sizes follow the output frame, so that the same
+picture reads at 640x480 and at 4K.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Iterator, Sequence
+
+import cv2
+import numpy as np
+from scipy.spatial import cKDTree
+
+from tracking.tracks import Tracks
+
+from .errors import UsageError
+
+# Okabe-Ito: distinguishable with the common colour-vision deficiencies (BGR order).
+PALETTE_BGR = np.array(
+    [
+        (0, 159, 230),  # orange
+        (233, 180, 86),  # sky blue
+        (115, 158, 0),  # bluish green
+        (66, 228, 240),  # yellow
+        (178, 114, 0),  # blue
+        (0, 94, 213),  # vermillion
+        (167, 121, 204),  # reddish purple
+    ],
+    dtype=np.uint8,
+)
+# Comparison colours: the two track sets in blue and vermillion, their disagreements in yellow,
+# the one pair of this palette that no common colour-vision deficiency confuses with the others.
+COMPARE_A_BGR = (178, 114, 0)
+COMPARE_B_BGR = (0, 94, 213)
+WARNING_BGR = (66, 228, 240)
+_HALO = (0, 0, 0)
+_NEUTRAL = (235, 235, 235)
+
+# Sub-pixel drawing: OpenCV takes integer coordinates scaled by 2**SHIFT.
+SHIFT = 4
+_FONT = cv2.FONT_HERSHEY_SIMPLEX
+# A detection this close to a measured track point (pixels) is that point.
+FALSE_DETECTION_TOLERANCE = 0.5
+
+
+def track_colour(track_id: int) -> tuple[int, int, int]:
+    """The BGR colour of a track id; the same id gets the same colour on every run."""
+    return tuple(int(c) for c in PALETTE_BGR[int(track_id) % len(PALETTE_BGR)])
+
+
+def to_fixed(points: np.ndarray) -> np.ndarray:
+    """Pixel positions as the int32 fixed-point coordinates OpenCV draws with ``shift=SHIFT``."""
+    return np.round(np.asarray(points) * (1 << SHIFT)).astype(np.int32)
+
+
+@dataclass(frozen=True)
+class View:
+    """The part of the input frame shown and its enlargement.
+
+    Attributes
+    ----------
+    box : tuple of int
+        (x0, y0, x1, y1): crop of the input frame in pixels, x1 and y1 exclusive.
+    size : tuple of int
+        (width, height) of the drawn frame in pixels.
+    """
+
+    box: tuple[int, int, int, int]
+    size: tuple[int, int]
+
+    @classmethod
+    def of(cls, frame_size: tuple[int, int], crop: str | None = None, scale: float = 1.0) -> "View":
+        """The view asked for by ``--crop x0,y0,x1,y1`` and ``--scale S`` on frames of ``frame_size``.
+
+        Raises
+        ------
+        UsageError
+            If the crop is malformed or outside the frame, or the scale is not positive.
+        """
+        width, height = frame_size
+        box = (0, 0, width, height) if crop is None else _parse_crop(crop, frame_size)
+        if not scale > 0:
+            raise UsageError(f"--scale must be > 0, got {scale:g}")
+        size = (max(2, round((box[2] - box[0]) * scale)), max(2, round((box[3] - box[1]) * scale)))
+        return cls(box, size)
+
+    @property
+    def _factors(self) -> np.ndarray:
+        x0, y0, x1, y1 = self.box
+        return np.array([self.size[0] / (x1 - x0), self.size[1] / (y1 - y0)])
+
+    def image(self, frame: np.ndarray) -> np.ndarray:
+        """The frame cropped and resized to :attr:`size` (always a new array)."""
+        x0, y0, x1, y1 = self.box
+        crop = frame[y0:y1, x0:x1]
+        if (crop.shape[1], crop.shape[0]) == self.size:
+            return crop.copy()
+        shrink = self.size[0] < crop.shape[1]
+        return cv2.resize(crop, self.size, interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
+
+    def points(self, xy: np.ndarray) -> np.ndarray:
+        """Input pixel positions (..., 2) in drawn-frame pixels; pixel centres map to pixel centres."""
+        return (np.asarray(xy, float) - np.array(self.box[:2]) + 0.5) * self._factors - 0.5
+
+
+def _parse_crop(text: str, frame_size: tuple[int, int]) -> tuple[int, int, int, int]:
+    try:
+        box = tuple(int(part) for part in text.split(","))
+    except ValueError:
+        box = ()
+    width, height = frame_size
+    if len(box) != 4:
+        raise UsageError(f"--crop must be x0,y0,x1,y1 in whole pixels, got {text!r}")
+    x0, y0, x1, y1 = box
+    if not (0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height):
+        raise UsageError(f"--crop {text} is not a box inside the {width}x{height} frame (x0 < x1 <= {width}, y0 < y1 <= {height})")
+    return box
+
+
+@dataclass(frozen=True)
+class Style:
+    """Line widths and sizes in drawn-frame pixels, from the frame size (640x480 is the unit)."""
+
+    line: int
+    radius: float
+    font: float
+    text: int
+    marker: int
+
+    @classmethod
+    def for_size(cls, size: tuple[int, int]) -> "Style":
+        unit = min(size) / 480.0
+        return cls(
+            line=max(1, round(1.5 * unit)),
+            radius=max(2.5, 3.5 * unit),
+            font=max(0.3, 0.42 * unit),
+            text=max(1, round(unit)),
+            marker=max(7, round(9 * unit)),
+        )
+
+
+class TrackLayer:
+    """One track set prepared for drawing in one view.
+
+    Parameters
+    ----------
+    tracks : Tracks
+    view : View
+    trail : int
+        Past positions per fading trail (0: heads only).
+    labels : bool
+        Write each track's id beside its head.
+    colour : tuple of int, optional
+        One BGR colour for every track (comparisons); by default each track's :func:`track_colour`.
+    warnings : ndarray of bool, shape (n_tracks, n_frames), optional
+        Links drawn in the warning colour: ``warnings[t, c]`` marks the link from column c - 1 to c.
+    frame_indices : ndarray of int, optional
+        0-based clip frame index of each column; by default column c is ``tracks.first_frame + c``.
+    """
+
+    def __init__(
+        self,
+        tracks: Tracks,
+        view: View,
+        *,
+        trail: int = 10,
+        labels: bool = True,
+        colour: tuple[int, int, int] | None = None,
+        warnings: np.ndarray | None = None,
+        frame_indices: np.ndarray | None = None,
+    ) -> None:
+        self.xy = view.points(tracks.xy)
+        self.hollow = tracks.interpolated
+        self.ids = tracks.track_ids
+        self.trail = int(trail)
+        self.labels = labels
+        self.warnings = np.zeros(tracks.present.shape, bool) if warnings is None else warnings
+        if colour is None:
+            self.palette = PALETTE_BGR.astype(int)
+            self.colour_index = self.ids % len(PALETTE_BGR)
+        else:
+            self.palette = np.array([colour])
+            self.colour_index = np.zeros(tracks.n_tracks, int)
+        self._colours = [tuple(int(c) for c in colour) for colour in self.palette]
+        self._link_palette = np.vstack([self.palette, WARNING_BGR])
+        self._texts = [str(track_id) for track_id in self.ids]
+        n_frames = tracks.n_frames
+        self.frame_indices = tracks.first_frame + np.arange(n_frames) if frame_indices is None else np.asarray(frame_indices)
+        present = tracks.present
+        has_points = present.any(axis=1)
+        first = np.argmax(present, axis=1)
+        last = n_frames - 1 - np.argmax(present[:, ::-1], axis=1)
+        # A track cut by the first or last frame of the set has not really started or ended there.
+        self.starts = np.flatnonzero(has_points & (first > 0))
+        self.start_column = first[self.starts]
+        self.ends = np.flatnonzero(has_points & (last < n_frames - 1))
+        self.end_column = last[self.ends]
+
+    def column(self, frame_index: int) -> int | None:
+        """Column holding 0-based clip frame ``frame_index``, or None."""
+        column = int(np.searchsorted(self.frame_indices, frame_index))
+        return column if column < len(self.frame_indices) and self.frame_indices[column] == frame_index else None
+
+    def segments(self, low: int, high: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Links between present positions from column ``low`` to column ``high``.
+
+        Returns
+        -------
+        rows : ndarray of int, shape (K,)
+            Track row of each link.
+        ends : ndarray of int, shape (K,)
+            Column where each link ends.
+        points : ndarray of int32, shape (K, 2, 2)
+            Fixed-point start and end of each link.
+        """
+        a, b = self.xy[:, low:high], self.xy[:, low + 1 : high + 1]
+        rows, offset = np.nonzero(~np.isnan(a[..., 0]) & ~np.isnan(b[..., 0]))
+        points = np.stack([a[rows, offset], b[rows, offset]], axis=1)
+        return rows, offset + low + 1, to_fixed(points)
+
+    def draw(self, canvas: np.ndarray, frame_index: int, style: Style) -> None:
+        """Draw trails, heads, marks and ids of frame ``frame_index`` onto ``canvas`` in place."""
+        column = self.column(frame_index)
+        if column is None:
+            return
+        low = max(0, column - self.trail)
+        if column > low:
+            rows, ends, points = self.segments(low, column)
+            age = column - ends
+            alpha = np.round(255 * (self.trail - age) / self.trail).astype(int)
+            warned, group = self._link_colours(rows, ends)
+            _draw_faded(canvas, points, group, self._link_palette, alpha, warned, style.line)
+        # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
+        self._draw_marks(canvas, column - self.trail, column, style)
+        present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
+        _draw_heads(canvas, self.xy[present, column], self.colour_index[present], self._colours, self.hollow[present, column], style)
+        if self.labels:
+            colours = [self._colours[index] for index in self.colour_index[present]]
+            _draw_labels(canvas, [self._texts[row] for row in present], self.xy[present, column], colours, style)
+
+    def _draw_marks(self, canvas: np.ndarray, low: int, high: int, style: Style) -> None:
+        """Mark the starts and ends that fall in columns ``low`` to ``high``."""
+        for rows, columns, kind in ((self.starts, self.start_column, cv2.MARKER_TRIANGLE_UP), (self.ends, self.end_column, cv2.MARKER_SQUARE)):
+            shown = (columns >= low) & (columns <= high)
+            for row, at in zip(rows[shown], columns[shown]):
+                _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style)
+
+    def _link_colours(self, rows: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each link is a warning, and its index into ``_link_palette`` (warnings last)."""
+        warned = self.warnings[rows, ends]
+        return warned, np.where(warned, len(self.palette), self.colour_index[rows])
+
+    def _colour(self, row: int) -> tuple[int, int, int]:
+        return self._colours[self.colour_index[row]]
+
+    def draw_summary(self, canvas: np.ndarray, style: Style) -> None:
+        """Draw every whole trajectory with its start and end marks onto ``canvas`` in place."""
+        rows, ends, points = self.segments(0, self.xy.shape[1] - 1)
+        _, group = self._link_colours(rows, ends)
+        for index in np.unique(group):
+            chosen = group == index
+            cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in self._link_palette[index]), style.line, cv2.LINE_AA, SHIFT)
+        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style)
+        if self.labels:
+            present = ~np.isnan(self.xy[..., 0])
+            rows = np.flatnonzero(present.any(axis=1))
+            starts = self.xy[rows, np.argmax(present[rows], axis=1)]
+            _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style)
+
+
+def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
+    """Draw links whose opacity is ``alpha`` (0-255), blending only the pixels they touch.
+
+    ``points`` are the (K, 2, 2) fixed-point link ends, ``group`` each link's row in ``palette``
+    (BGR, at most 255 rows), ``thick`` the links drawn twice as wide (warnings), ``line`` the
+    width in pixels. Links are drawn twice into single-channel layers: which palette colour (drawn
+    wider, without anti-aliasing, so that it covers every pixel the other reaches) and how opaque
+    (anti-aliased, so it alone carries the smooth edges).
+    """
+    inks, opacity = _scratch(canvas.shape[:2])
+    try:
+        _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line)
+    finally:
+        inks.fill(0)
+        opacity.fill(0)
+
+
+def _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line) -> None:
+    widths = np.where(thick, 2 * line + 1, line)
+    # Warnings (thick) last, so that they lie on top.
+    for index, size in sorted({(int(g), int(w)) for g, w in zip(group, widths)}, key=lambda key: (key[1] > line, key)):
+        picked = (group == index) & (widths == size)
+        cv2.polylines(inks, points[picked], False, index + 1, size + 4, cv2.LINE_8, SHIFT)
+    # Oldest first, warnings last, so that newer links and warnings lie on top.
+    order = np.lexsort((alpha, thick))
+    keys = np.stack([thick[order], alpha[order], widths[order]], axis=1)
+    boundaries = np.flatnonzero(np.any(np.diff(keys, axis=0) != 0, axis=1)) + 1
+    for run in np.split(order, boundaries):
+        cv2.polylines(opacity, points[run], False, int(alpha[run[0]]), int(widths[run[0]]), cv2.LINE_AA, SHIFT)
+    found = cv2.findNonZero(opacity)
+    if found is None:
+        return
+    xs, ys = found.reshape(-1, 2).T
+    flat = ys.astype(np.intp) * canvas.shape[1] + xs
+    weight = opacity.reshape(-1).take(flat).astype(np.uint16)[:, None]
+    # Index 0 (no ink) takes black, as a pixel outside the colour layer would.
+    over = np.vstack([[0, 0, 0], palette]).astype(np.uint16).take(inks.reshape(-1).take(flat), axis=0)
+    # Pixels viewed as 3-byte items: gathering and scattering whole pixels is several times
+    # faster than indexing rows of a (pixels, 3) array.
+    pixels = canvas.reshape(-1, 3).view("V3").reshape(-1)
+    under = pixels.take(flat).view(np.uint8).reshape(-1, 3)
+    # Integer blending, rounded, so the same on every machine; (v + 1 + (v >> 8)) >> 8 is v // 255
+    # for every v below 65536, without a division.
+    mixed = under * (255 - weight) + over * weight + 127
+    blended = ((mixed + 1 + (mixed >> 8)) >> 8).astype(np.uint8)
+    pixels.put(flat, blended.view("V3").reshape(-1))
+
+
+_SCRATCH: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _scratch(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Two zeroed uint8 layers of a frame's (height, width), reused from frame to frame (and left zeroed)."""
+    if shape not in _SCRATCH:
+        _SCRATCH.clear()
+        _SCRATCH[shape] = (np.zeros(shape, np.uint8), np.zeros(shape, np.uint8))
+    return _SCRATCH[shape]
+
+
+def _draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
+    """A disc at each measured position and a ring at each interpolated one, on a black halo.
+
+    ``groups`` holds each head's index into ``colours``. Discs are drawn as zero-length lines
+    (round caps) in one call per colour, which is much faster than a circle per head.
+    """
+    fixed = to_fixed(xy)
+    dots = np.repeat(fixed[~hollow][:, None], 2, axis=1)
+    size = max(3, round(2 * style.radius))
+    cv2.polylines(canvas, dots, False, _HALO, size + 2, cv2.LINE_AA, SHIFT)
+    solid = groups[~hollow]
+    for group in np.unique(solid):
+        cv2.polylines(canvas, dots[solid == group], False, colours[group], size, cv2.LINE_AA, SHIFT)
+    # Rings are larger than discs, so that the hole shows even at small sizes.
+    ring = int(round(style.radius * 1.4 * (1 << SHIFT)))
+    for centre, group in zip(map(tuple, fixed[hollow].tolist()), groups[hollow].tolist()):
+        cv2.circle(canvas, centre, ring, _HALO, style.line + 2, cv2.LINE_AA, SHIFT)
+        cv2.circle(canvas, centre, ring, colours[group], style.line, cv2.LINE_AA, SHIFT)
+
+
+def _draw_marker(canvas, xy, colour, kind: int, style: Style, size: float = 1.6) -> None:
+    """A marker ``size`` times the style's marker size, on a black halo."""
+    if np.isnan(xy[0]):
+        return
+    at = (int(round(xy[0])), int(round(xy[1])))
+    pixels = int(round(style.marker * size))
+    cv2.drawMarker(canvas, at, _HALO, kind, pixels, style.line + 2, cv2.LINE_AA)
+    cv2.drawMarker(canvas, at, colour, kind, pixels, style.line, cv2.LINE_AA)
+
+
+def _draw_labels(canvas, texts: list[str], xy: np.ndarray, colours: list, style: Style) -> None:
+    """Each text up and to the right of its position."""
+    gap = style.radius + 2
+    origins = np.round(xy + [gap, -gap]).astype(int).tolist()
+    for text, origin, colour in zip(texts, map(tuple, origins), colours):
+        draw_text(canvas, text, origin, colour, style.font, style.text)
+
+
+def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int) -> None:
+    """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo."""
+    cv2.putText(canvas, text, origin, _FONT, font, _HALO, 3 * thickness // 2 + 2, cv2.LINE_AA)
+    cv2.putText(canvas, text, origin, _FONT, font, colour, thickness, cv2.LINE_AA)
+
+
+class FalseDetections:
+    """Detections that no track holds (false detections), grouped by frame, in drawn-frame pixels.
+
+    Parameters
+    ----------
+    frame, x, y : ndarray, shape (M,)
+        0-based frame index and position (pixels) of every detection.
+    tracks : Tracks
+    view : View
+    frame_indices : ndarray of int, optional
+        Clip frame index of each track column; by default ``tracks.first_frame + column``.
+    tolerance : float
+        A detection within this distance (pixels) of a measured track point in its frame is held.
+    """
+
+    def __init__(self, frame, x, y, tracks: Tracks, view: View, frame_indices=None, tolerance: float = FALSE_DETECTION_TOLERANCE) -> None:
+        frame = np.asarray(frame, np.int64)
+        columns = tracks.first_frame + np.arange(tracks.n_frames) if frame_indices is None else np.asarray(frame_indices)
+        rows, column = np.nonzero(tracks.present & ~tracks.interpolated)
+        # Frames become a third coordinate spaced wider than the tolerance, so one tree query
+        # matches within frames only.
+        spacing = 4.0 * tolerance + 1.0
+        held_points = np.column_stack([tracks.xy[rows, column], columns[column] * spacing])
+        queries = np.column_stack([x, y, frame * spacing])
+        if len(held_points) and len(queries):
+            distance, _ = cKDTree(held_points).query(queries, distance_upper_bound=tolerance)
+            free = ~np.isfinite(distance)
+        else:
+            free = np.ones(len(queries), bool)
+        order = np.argsort(frame[free], kind="stable")
+        self.frames = frame[free][order]
+        self.xy = view.points(np.column_stack([x, y])[free][order])
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def draw(self, canvas: np.ndarray, frame_index: int, style: Style) -> None:
+        """Mark the false detections of frame ``frame_index`` with a cross, in place."""
+        low, high = np.searchsorted(self.frames, [frame_index, frame_index + 1])
+        for xy in self.xy[low:high]:
+            # Smaller than the track marks: false detections may be many.
+            _draw_marker(canvas, xy, _NEUTRAL, cv2.MARKER_TILTED_CROSS, style, size=0.8)
+
+
+# A legend entry: symbol ("dot", "ring", "start", "end", "cross" or "line"), BGR colour, text.
+LegendEntry = tuple[str, tuple[int, int, int], str]
+
+
+def track_legend(false_detections: bool) -> list[LegendEntry]:
+    """Legend of :meth:`TrackLayer.draw`: what each mark means."""
+    entries = [
+        ("dot", _NEUTRAL, "measured"),
+        ("ring", _NEUTRAL, "interpolated"),
+        ("start", _NEUTRAL, "track start"),
+        ("end", _NEUTRAL, "track end"),
+    ]
+    return entries + [("cross", _NEUTRAL, "false detection")] if false_detections else entries
+
+
+def draw_legend(canvas: np.ndarray, entries: Sequence[LegendEntry], style: Style) -> None:
+    """A small key in the top-right corner on a darkened box, in place."""
+    if not entries:
+        return
+    font = style.font * 0.9
+    (_, text_height), _ = cv2.getTextSize("Ag", _FONT, font, style.text)
+    row = int(text_height * 2)
+    pad = row // 2
+    symbol = row
+    text_width = max(cv2.getTextSize(text, _FONT, font, style.text)[0][0] for _, _, text in entries)
+    width = pad * 3 + symbol + text_width
+    height = pad * 2 + row * len(entries)
+    x0 = max(0, canvas.shape[1] - width - pad)
+    box = canvas[pad : pad + height, x0 : x0 + width]
+    box[...] = (box.astype(np.uint16) * 2 // 5).astype(np.uint8)
+    for index, (kind, colour, text) in enumerate(entries):
+        y = pad + pad + row * index + row // 2
+        x = x0 + pad + symbol // 2
+        if kind == "line":
+            cv2.line(canvas, (x - symbol // 2, y), (x + symbol // 2, y), colour, max(2, style.line), cv2.LINE_AA)
+        elif kind in ("dot", "ring"):
+            radius = int(round(min(style.radius, symbol / 3) * (1 << SHIFT)))
+            cv2.circle(canvas, (x << SHIFT, y << SHIFT), radius, colour, -1 if kind == "dot" else style.line, cv2.LINE_AA, SHIFT)
+        else:
+            kinds = {"start": cv2.MARKER_TRIANGLE_UP, "end": cv2.MARKER_SQUARE, "cross": cv2.MARKER_TILTED_CROSS}
+            cv2.drawMarker(canvas, (x, y), colour, kinds[kind], int(symbol * 0.6), style.line, cv2.LINE_AA)
+        cv2.putText(canvas, text, (x0 + pad * 2 + symbol, y + text_height // 2), _FONT, font, _NEUTRAL, style.text, cv2.LINE_AA)
+
+
+def annotate(
+    image: np.ndarray,
+    frame_index: int,
+    view: View,
+    layers: Sequence[TrackLayer],
+    *,
+    false_detections: FalseDetections | None = None,
+    legend: Sequence[LegendEntry] = (),
+    title: str = "",
+) -> np.ndarray:
+    """One annotated frame: the view of ``image`` with every layer, false detections, legend and counter.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W, 3) BGR
+        The input frame (not modified).
+    frame_index : int
+        Its 0-based index in the clip, printed in the top-left corner after ``title``.
+
+    Returns
+    -------
+    ndarray of uint8, shape (view height, view width, 3)
+    """
+    canvas = np.ascontiguousarray(view.image(image))
+    style = Style.for_size(view.size)
+    for layer in layers:
+        layer.draw(canvas, frame_index, style)
+    if false_detections is not None:
+        false_detections.draw(canvas, frame_index, style)
+    draw_legend(canvas, legend, style)
+    _draw_title(canvas, f"{title}frame {frame_index}", style)
+    return canvas
+
+
+def _draw_title(canvas: np.ndarray, text: str, style: Style) -> None:
+    (_, text_height), _ = cv2.getTextSize("0", _FONT, style.font, style.text)
+    draw_text(canvas, text, (text_height, 2 * text_height), _NEUTRAL, style.font, style.text)
+
+
+def annotate_frames(frames: Iterable[tuple[int, np.ndarray]], view: View, layers: Sequence[TrackLayer], **options) -> Iterator[tuple[int, np.ndarray]]:
+    """:func:`annotate` every ``(frame_index, image)`` a frame source yields; yields ``(frame_index, annotated)``."""
+    for index, image in frames:
+        yield index, annotate(image, index, view, layers, **options)
+
+
+def summary_picture(image: np.ndarray, view: View, layers: Sequence[TrackLayer], title: str = "") -> np.ndarray:
+    """Every trajectory of every layer over one frame (the paper's rotating-dish figure).
+
+    Returns
+    -------
+    ndarray of uint8, shape (view height, view width, 3)
+    """
+    canvas = view.image(image)
+    style = Style.for_size(view.size)
+    for layer in layers:
+        layer.draw_summary(canvas, style)
+    draw_legend(canvas, [("start", _NEUTRAL, "track start"), ("end", _NEUTRAL, "track end")], style)
+    if title:
+        _draw_title(canvas, title, style)
+    return canvas

@@ -1,0 +1,151 @@
+"""End-to-end: ``seedtrack detect`` and the detection options of ``seedtrack run``."""
+
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+import pytest
+
+from app.cli import main
+from data.csvio import read_table
+from data.dish import DishSpec, make_dish_scene, write_dish_clip
+from data.video import write_video
+from tracking.metrics import match_frame
+
+COLUMNS = ["frame", "x", "y", "area", "mean_intensity", "eccentricity"]
+SPEC = DishSpec(seeds=30, frames=4, width=320, height=240, rim_speed=15.0, random_seed=7, touching_pairs=3, rim=True, glare_spots=2, dust_specks=8)
+
+
+def seedtrack(*args):
+    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def dish(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("dish")
+    scene = write_dish_clip(SPEC, folder)
+    return folder / "clip.mp4", scene
+
+
+def header(path):
+    return path.read_text().splitlines()[0].split(",")
+
+
+def test_detect_finds_every_seed_and_draws_a_preview(dish, tmp_path):
+    clip, scene = dish
+    out, preview = tmp_path / "detections.csv", tmp_path / "preview.png"
+    result = seedtrack("detect", clip, "--out", out, "--preview", preview, "--preview-frame", 2)
+    assert result.returncode == 0, result.stderr
+    assert header(out) == COLUMNS
+    table = read_table(out, required=("frame", "x", "y"))
+    for k in range(SPEC.frames):
+        here = table["frame"] == k
+        found = np.column_stack((table["x"][here], table["y"][here]))
+        rows, _ = match_frame(found, scene.truth.xy[:, k], 1.0)
+        assert len(rows) == len(found) == SPEC.seeds
+    page = cv2.imread(str(preview))
+    # Enlarged to at least 1280 pixels wide; red rings for the seeds, a green circle for the dish.
+    assert page.shape[1] >= 1280
+    red = (page[..., 2] > 200) & (page[..., 1] < 60) & (page[..., 0] < 60)
+    green = (page[..., 1] > 150) & (page[..., 2] < 60) & (page[..., 0] < 60)
+    assert red.sum() > 30 * SPEC.seeds and green.sum() > 1000
+
+
+def test_run_takes_the_same_detection_options(dish, tmp_path):
+    clip, _ = dish
+    options = ["--threshold", "60", "--polarity", "dark", "--no-split", "--min-area", "6", "--roi", "160,120,60"]
+    assert main(["detect", str(clip), "--out", str(tmp_path / "d.csv"), *options]) == 0
+    assert main(["run", str(clip), "--out", str(tmp_path / "run"), *options]) == 0
+    assert (tmp_path / "d.csv").read_bytes() == (tmp_path / "run" / "detections.csv").read_bytes()
+    table = read_table(tmp_path / "d.csv")
+    assert 0 < len(table["x"]) and np.hypot(table["x"] - 160, table["y"] - 120).max() <= 60
+
+
+def test_frame_range_and_step(dish, tmp_path):
+    clip, _ = dish
+    assert main(["detect", str(clip), "--out", str(tmp_path / "d.csv"), "--start", "1", "--step", "2"]) == 0
+    assert sorted(set(read_table(tmp_path / "d.csv")["frame"])) == [1, 3]
+
+
+def test_mask_image_limits_the_search(dish, tmp_path):
+    clip, _ = dish
+    mask = np.zeros((SPEC.height, SPEC.width), np.uint8)
+    mask[:, : SPEC.width // 2] = 255
+    cv2.imwrite(str(tmp_path / "mask.png"), mask)
+    assert main(["detect", str(clip), "--out", str(tmp_path / "d.csv"), "--roi", str(tmp_path / "mask.png")]) == 0
+    table = read_table(tmp_path / "d.csv")
+    assert len(table["x"]) > 0 and table["x"].max() < SPEC.width / 2
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--min-area", "50", "--max-area", "10"], "exceeds max area"),
+        (["--roi", "{mask}"], "mask is 20x10, the frames 320x240"),
+        (["--roi", "{junk}"], "not a mask image"),
+        (["--threshold", "bright"], "--threshold must be otsu, adaptive or a number"),
+        (["--threshold", "300"], "threshold must lie in 0..255"),
+        (["--roi", "10,10,-3"], "radius > 0"),
+        (["--detector", "log", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
+        (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed"),
+        (["--preview", "{folder}/p.txt"], "name an image file"),
+    ],
+)
+def test_nonsense_options_are_one_line_exit_2_and_nothing_written(dish, tmp_path, capsys, options, message):
+    clip, _ = dish
+    cv2.imwrite(str(tmp_path / "small.png"), np.full((10, 20), 255, np.uint8))
+    (tmp_path / "junk.png").write_bytes(b"not an image")
+    paths = {"mask": tmp_path / "small.png", "junk": tmp_path / "junk.png", "folder": tmp_path}
+    options = [option.format(**paths) for option in options]
+    assert main(["detect", str(clip), "--out", str(tmp_path / "d.csv"), *options]) == 2
+    stderr = capsys.readouterr().err
+    assert stderr.count("\n") == 1 and message in stderr
+    assert not (tmp_path / "d.csv").exists() and not (tmp_path / "p.png").exists()
+
+
+def test_truncated_video_keeps_the_decoded_frames_and_says_where_it_stopped(tmp_path):
+    scene = make_dish_scene(DishSpec(seeds=20, frames=12, width=160, height=120, random_seed=2, noise_sigma=30))
+    clip = tmp_path / "clip.mp4"
+    write_video(clip, scene.frames(), 25.0)
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(clip.read_bytes()[: clip.stat().st_size // 2])
+    result = seedtrack("detect", cut, "--out", tmp_path / "d.csv", "--threshold", "100")
+    assert result.returncode == 0, result.stderr
+    frames = sorted(set(read_table(tmp_path / "d.csv")["frame"]))
+    assert 0 < len(frames) < 12 and frames == list(range(len(frames)))
+    assert result.stderr.count("\n") == 1
+    assert f"decoding stopped at frame {len(frames)}" in result.stderr and str(cut) in result.stderr
+
+
+def test_empty_frame_gives_no_detections(tmp_path):
+    scene = make_dish_scene(DishSpec(seeds=15, frames=3, width=160, height=120, random_seed=4))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"{k}.png"), scene.render(k))
+    cv2.imwrite(str(folder / "3.png"), np.full((120, 160, 3), 128, np.uint8))
+    assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv")]) == 0
+    frames = read_table(tmp_path / "d.csv")["frame"]
+    assert [int(np.sum(frames == k)) for k in range(4)] == [15, 15, 15, 0]
+
+
+def test_temporal_background_ignores_what_never_moves(tmp_path):
+    # Dark specks fixed on the sensor and a bead moving across: against the median over time the
+    # specks are background, against the local median they are objects.
+    rng = np.random.default_rng(3)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    field = np.full((80, 120), 200.0)
+    for x, y in ((20, 20), (90, 60), (60, 15)):
+        cv2.circle(field, (x, y), 2, 90, -1)
+    for k in range(9):
+        image = field.copy()
+        cv2.circle(image, (10 + 12 * k, 40), 3, 40, -1)
+        cv2.imwrite(str(folder / f"{k}.png"), np.clip(image + rng.normal(0, 2, image.shape), 0, 255).astype(np.uint8))
+    for background, per_frame in (("local", 4), ("temporal", 1)):
+        assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), "--background", background]) == 0
+        table = read_table(tmp_path / "d.csv")
+        assert np.array_equal(np.bincount(table["frame"].astype(int)), np.full(9, per_frame)), background
+    np.testing.assert_allclose(table["y"], 40, atol=0.1)
+    np.testing.assert_allclose(table["x"], 10 + 12 * np.arange(9), atol=0.1)
