@@ -27,7 +27,7 @@ from .gap_closing import close_gaps
 from .goa import GOAConfig, Progress, _HeadState, assign_step, goa_pass, initial_links
 from .initialisation import pairs_within
 from .motion import Candidates
-from .tracks import Tracks, tracks_from_assignment
+from .tracks import Tracks, point_frames, tracks_from_assignment
 
 # Next frames in which a track back from slaves must show that its motion continues.
 _CONTINUATION_FRAMES = 2
@@ -137,22 +137,26 @@ def _births(frames: Sequence[np.ndarray], free: list[np.ndarray], start: int, en
     """New tracks among the free measurements of frames ``start`` to ``end`` (inclusive).
 
     The first links are chosen as GOA-updown chooses them (each scored by the smoothest path it
-    starts), then GOA runs on the free measurements alone; a candidate that needs a slave before
-    ``end`` is not confirmed.
+    starts over the free measurements of the next ``config.lookahead`` frames, beyond ``end``
+    where the clip allows), then GOA runs on the free measurements of ``start..end`` alone; a
+    candidate that needs a slave before ``end`` is not confirmed.
 
     Returns
     -------
     ndarray of int, shape (B, len(frames))
         Each confirmed track's measurement index per frame, -1 outside ``start..end``.
     """
-    index = [np.flatnonzero(free[k]) for k in range(start, end + 1)]
-    window = [frames[k][i] for k, i in zip(range(start, end + 1), index)]
+    # Scoring reaches past ``end``: a wrong first link can look smooth for one triplet by chance.
+    horizon = max(end + 1, min(start + config.lookahead, len(frames)))
+    index = [np.flatnonzero(free[k]) for k in range(start, horizon)]
+    ahead = [frames[k][i] for k, i in zip(range(start, horizon), index)]
+    window = ahead[: end - start + 1]
     if window[0].shape[0] == 0:
         return np.empty((0, len(frames)), np.int64)
     if len(window) == 1:
         local = np.arange(window[0].shape[0])[:, None]
     else:
-        first = initial_links(window, config)
+        first = initial_links(ahead, config)
         local = goa_pass(window, first[first[:, 1] != UNASSIGNED], config)
         local = local[(local != UNASSIGNED).all(axis=1)]
     rows = np.full((local.shape[0], len(frames)), UNASSIGNED, dtype=np.int64)
@@ -249,7 +253,7 @@ def goa_updown_open(
         Ordered by first frame, then by measurement index in it; inner gaps interpolated,
         no trailing slaves. Measurements on no track (false detections) are left out.
     """
-    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    frames = point_frames(frames)
     n = len(frames)
     up = open_pass(frames, np.empty((0, 2), np.int64), config, lifecycle.max_gap, progress)
     backwards = frames[::-1]
