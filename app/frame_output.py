@@ -78,11 +78,12 @@ def write_frames(out: str, frames: Iterable[tuple[int, np.ndarray]], fps: float,
         if kind == "gif":
             return _write_gif(Path(out), frames, fps, bar)
         if kind == "png":
-            for _, image in frames:
-                write_png(Path(out), image)
-                bar.update(1)
-                return 1
-            raise DataError(out, "no frame to write")
+            first = next(iter(frames), None)
+            if first is None:
+                raise DataError(out, "no frame to write")
+            write_png(Path(out), first[1])
+            bar.update(1)
+            return 1
         folder = Path(out)
         prepare_output_folder(folder)
         count = 0
@@ -105,5 +106,5 @@ def _write_gif(path: Path, frames: Iterable[tuple[int, np.ndarray]], fps: float,
         if not images:
             raise DataError(path, "no frame to write")
         # GIF delays are whole hundredths of a second.
-        images[0].save(temporary, format="GIF", save_all=True, append_images=images[1:], duration=max(20, round(1000 / fps, -1)), loop=0)
+        images[0].save(temporary, format="GIF", save_all=True, append_images=images[1:], duration=max(20, int(round(1000 / fps, -1))), loop=0)
     return len(images)

@@ -66,7 +66,7 @@ def check_view_options(args: argparse.Namespace) -> str | None:
         If an option is out of range or no output is asked for.
     """
     if args.out is None and getattr(args, "summary", None) is None:
-        raise UsageError("give --out (and/or --summary for render)")
+        raise UsageError("give --out" + (" or --summary" if hasattr(args, "summary") else ""))
     if args.trail < 0:
         raise UsageError(f"--trail must be >= 0, got {args.trail}")
     if args.fps is not None and not args.fps > 0:
@@ -85,6 +85,9 @@ def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tupl
     DataError
         If the input cannot be read, or a track set has frames past its end.
     """
+    for path, tracks in track_sets:
+        if tracks.n_frames == 0:
+            raise DataError(path, "holds no track points")
     last_frames = [tracks.first_frame + tracks.n_frames - 1 for _, tracks in track_sets]
     if kind == "png":
         frame = args.frame if args.frame is not None else max(last_frames)
