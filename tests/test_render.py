@@ -289,3 +289,11 @@ def test_disagreement_across_a_gap():
     expected = np.zeros((2, 5), bool)
     expected[:, 4] = True
     np.testing.assert_array_equal(disagreeing_links(wrong, truth, 1.0), expected)
+
+
+def test_compare_with_tracks_past_the_video_is_one_line_exit_2(clip, tmp_path, capsys):
+    out = tmp_path / "compare.mp4"
+    status = main(["compare", str(clip / "clip.mp4"), str(clip / "truth.csv"), str(_outside(tmp_path)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1 and "late.csv" in err and "lie outside the video" in err
+    assert not out.exists()
