@@ -26,6 +26,8 @@ _MAX_ATTEMPTS = 200
 # with three measured points, the least that a triplet-based tracker (IPAN) needs to start or
 # end a trajectory. The sources do not say where their generator put occlusions.
 _CLEAR_ENDS = 3
+# With entry and exit, a trajectory is kept if it is in view in this many frames at least.
+_MIN_IN_VIEW = 3
 
 
 @dataclass(frozen=True)
@@ -51,8 +53,15 @@ class PSMGSpec:
     max_speed : float or None
         Largest speed, pixels/frame; None for twice the mean speed.
     occlusion : float
-        Probability that a point is not measured in a frame (never in the first three or the last
-        three frames, never two frames in a row).
+        Probability that a point's occlusion starts in a frame (never in the first three or the
+        last three frames; after an occlusion the point is seen at least once before the next).
+    max_gap : int
+        Longest occlusion, frames; each lasts 1 to ``max_gap`` frames (uniform), cut short three
+        frames before the end.
+    entry_exit : bool
+        Draw trajectories in a larger square around the view (by the distance a point can travel
+        in the sequence on each side), so that points enter and leave; a trajectory is kept if
+        it is in view in at least three frames, and has no position outside the view.
     random_seed : int
         Seed of every random choice: same spec, same data.
     """
@@ -66,6 +75,8 @@ class PSMGSpec:
     angle_step_sigma: float = 0.0
     max_speed: float | None = None
     occlusion: float = 0.0
+    max_gap: int = 1
+    entry_exit: bool = False
     random_seed: int = 0
 
     def __post_init__(self) -> None:
@@ -77,6 +88,8 @@ class PSMGSpec:
             raise ValueError("standard deviations must be non-negative")
         if not 0 <= self.occlusion < 1:
             raise ValueError(f"occlusion must lie in [0, 1), got {self.occlusion}")
+        if self.max_gap < 1:
+            raise ValueError(f"max_gap must be at least 1 frame, got {self.max_gap}")
 
     @property
     def speed_limit(self) -> float:
@@ -92,8 +105,8 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
     frames : list of ndarray, each (M_k, 2)
         Measured positions per frame, pixels, in random order.
     truth : Tracks
-        One track per trajectory with its position in every frame; occluded frames are marked
-        interpolated (no measurement).
+        One track per trajectory with its position in every frame it is in view (NaN outside);
+        occluded frames are marked interpolated (no measurement).
 
     Raises
     ------
@@ -103,6 +116,10 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
     rng = np.random.default_rng(spec.random_seed)
     paths = _paths_in_view(rng, spec)
     hidden = _occlusions(rng, spec)
+    if spec.entry_exit:
+        outside = ((paths < 0) | (paths > spec.size)).any(axis=2)
+        paths[outside] = np.nan
+        hidden |= outside
     frames, measurement = [], np.full((spec.trajectories, spec.frames), NO_MEASUREMENT, dtype=np.int64)
     for k in range(spec.frames):
         seen = np.flatnonzero(~hidden[:, k])
@@ -113,14 +130,17 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
 
 
 def _paths_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(trajectories, frames, 2) positions of trajectories that never leave the view."""
+    """(trajectories, frames, 2) positions of trajectories that never leave the view, or with
+    entry/exit, that are in view in at least three frames."""
     kept: list[np.ndarray] = []
     wanted = spec.trajectories
+    margin = spec.speed_limit * (spec.frames - 1) if spec.entry_exit else 0.0
     for _ in range(_MAX_ATTEMPTS):
         if wanted <= 0:
             break
-        batch = _random_paths(rng, spec, _BATCH_FACTOR * wanted + 8)
-        inside = ((batch >= 0) & (batch <= spec.size)).all(axis=(1, 2))
+        batch = _random_paths(rng, spec, _BATCH_FACTOR * wanted + 8, margin)
+        in_view = ((batch >= 0) & (batch <= spec.size)).all(axis=2)
+        inside = in_view.sum(axis=1) >= _MIN_IN_VIEW if spec.entry_exit else in_view.all(axis=1)
         kept.append(batch[inside][:wanted])
         wanted -= kept[-1].shape[0]
     if wanted > 0:
@@ -131,8 +151,8 @@ def _paths_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
     return np.concatenate(kept) if kept else np.empty((0, spec.frames, 2))
 
 
-def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int) -> np.ndarray:
-    start = rng.uniform(0.0, spec.size, size=(count, 2))
+def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int, margin: float = 0.0) -> np.ndarray:
+    start = rng.uniform(-margin, spec.size + margin, size=(count, 2))
     heading = rng.uniform(0.0, 2.0 * math.pi, size=count)
     speed = rng.normal(spec.mean_speed, spec.speed_sigma, size=count)
     heading_steps = rng.normal(0.0, math.radians(spec.angle_step_sigma), size=(count, max(spec.frames - 2, 0)))
@@ -149,10 +169,15 @@ def _random_paths(rng: np.random.Generator, spec: PSMGSpec, count: int) -> np.nd
 
 
 def _occlusions(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:
-    """(trajectories, frames) bool: single-frame occlusions away from the first and last three frames."""
-    hidden = rng.random((spec.trajectories, spec.frames)) < spec.occlusion
-    hidden[:, :_CLEAR_ENDS] = False
-    hidden[:, spec.frames - _CLEAR_ENDS :] = False
-    for k in range(1, spec.frames):
-        hidden[:, k] &= ~hidden[:, k - 1]
+    """(trajectories, frames) bool: occlusions of 1 to max_gap frames, away from the first and
+    last three frames, each followed by at least one frame in which the point is seen."""
+    starts = rng.random((spec.trajectories, spec.frames)) < spec.occlusion
+    length = rng.integers(1, spec.max_gap + 1, size=starts.shape) if spec.max_gap > 1 else np.ones(starts.shape, int)
+    hidden = np.zeros(starts.shape, bool)
+    remaining = np.zeros(spec.trajectories, int)
+    for k in range(_CLEAR_ENDS, spec.frames - _CLEAR_ENDS):
+        begin = starts[:, k] & (remaining == 0) & ~hidden[:, k - 1]
+        remaining = np.where(begin, length[:, k], remaining)
+        hidden[:, k] = remaining > 0
+        remaining = np.maximum(remaining - 1, 0)
     return hidden

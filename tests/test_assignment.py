@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from tracking.assignment import UNASSIGNED, solve_dense, solve_split
+from tracking.assignment import UNASSIGNED, solve_dense, solve_sparse, solve_split
 
 
 def random_problem(rng, n_heads, n_measurements, density):
@@ -41,3 +41,17 @@ def test_no_pairs_gives_all_slaves():
     empty = np.empty(0, np.int64)
     result = solve_split(3, 2, empty, empty, np.empty(0), 0.1)
     np.testing.assert_array_equal(result, [UNASSIGNED] * 3)
+
+
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("corner", [0.0, 0.1])
+def test_sparse_agrees_with_dense_on_one_crowded_component(seed, corner):
+    # Dense pair graphs and weights below zero (CM2 can give them): the reduced slave and
+    # false-track blocks must still reach the full matrix's optimum.
+    rng = np.random.default_rng(seed)
+    n_heads, n_measurements = rng.integers(2, 30, size=2)
+    head, measurement, weight = random_problem(rng, n_heads, n_measurements, density=0.6)
+    weight = weight - 0.05
+    dense = solve_dense(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    sparse = solve_sparse(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    np.testing.assert_array_equal(dense, sparse)

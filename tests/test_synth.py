@@ -67,3 +67,22 @@ def test_bad_options_are_one_line_exit_2_nothing_written(tmp_path, capsys, optio
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and message in error, error
     assert not (tmp_path / "out").exists()
+
+
+def test_longer_gaps_and_points_entering_and_leaving(tmp_path):
+    argv = ["synth", "psmg", "--out", str(tmp_path), "--tracks", "40", "--occlusion", "0.3", "--max-gap", "3", "--entry-exit"]
+    assert main(argv) == 0
+    truth = read_table(tmp_path / "truth.csv", required=("track_id", "frame", "x", "y", "interpolated"))
+    points = read_table(tmp_path / "points.csv", required=("frame", "x", "y"))
+    assert points["frame"].size == (truth["interpolated"] == 0).sum()
+    assert min(truth["x"].min(), truth["y"].min()) >= 0 and max(truth["x"].max(), truth["y"].max()) <= 200
+    first = {t: truth["frame"][truth["track_id"] == t].min() for t in range(40)}
+    last = {t: truth["frame"][truth["track_id"] == t].max() for t in range(40)}
+    assert any(f > 0 for f in first.values()) and any(f < 19 for f in last.values())
+    # Runs of hidden frames inside a track: some longer than one frame, none longer than three.
+    runs = []
+    for t in range(40):
+        mine = truth["track_id"] == t
+        flags = truth["interpolated"][mine][np.argsort(truth["frame"][mine])]
+        runs += [len(r) for r in "".join(map(str, flags)).split("0") if r]
+    assert max(runs) == 3 and min(runs) == 1

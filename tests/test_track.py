@@ -99,7 +99,7 @@ def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):
     assert not (tmp_path / "t.csv").exists()
 
 
-@pytest.mark.parametrize("model", ["--individual-model=im1", "--individual-model=im3", "--combined-model=cm2", "--first-links=nearest"])
+@pytest.mark.parametrize("model", ["--individual-model=im1", "--individual-model=im3", "--combined-model=cm2", "--first-links=nearest", "--first-links=paper"])
 def test_model_options_reach_the_tracker(scene, tmp_path, model):
     folder, columns = scene
     out = tmp_path / "tracks.csv"

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
 
 UNASSIGNED = -1
 
@@ -88,10 +88,12 @@ def solve_split(
     unmatched_weight: float,
     corner_weight: float = 0.0,
 ) -> np.ndarray:
-    """Solve each connected component of the pair graph separately; same optimum as dense.
+    """Solve the connected components of the pair graph apart; same optimum as dense.
 
-    Components made of one head and one measurement are decided without a solver: their pair
-    is taken whenever it is cheaper than leaving both unmatched.
+    Components with a single head or a single measurement are decided without a solver: their
+    cheapest pair is taken whenever it is cheaper than leaving both unmatched. The others go
+    to one sparse solve (:func:`solve_sparse`), in which they cannot interact, so that time
+    grows with the number of pairs rather than with the square of the largest component.
 
     Returns
     -------
@@ -104,33 +106,67 @@ def solve_split(
     graph = coo_matrix(
         (np.ones(head.size), (head, n_heads + measurement)), shape=(n_heads + n_measurements,) * 2
     )
-    _, label = connected_components(graph, directed=False)
+    n_components, label = connected_components(graph, directed=False)
+    head_count = np.bincount(label[:n_heads], minlength=n_components)
+    measurement_count = np.bincount(label[n_heads:], minlength=n_components)
+
+    # Pairs grouped by component, cheapest first within each.
     pair_label = label[head]
-    order = np.argsort(pair_label, kind="stable")
+    order = np.lexsort((weight, pair_label))
     boundaries = np.flatnonzero(np.diff(pair_label[order])) + 1
     starts = np.concatenate(([0], boundaries))
     ends = np.concatenate((boundaries, [order.size]))
 
-    single = (ends - starts) == 1
-    lone_pairs = order[starts[single]]
-    # A lone pair against one slave and one false track: matching costs w (+ corner), leaving
-    # both costs 2 * unmatched; ties go to the match, as the solver's would.
-    take = weight[lone_pairs] + corner_weight <= 2 * unmatched_weight
-    result[head[lone_pairs[take]]] = measurement[lone_pairs[take]]
+    # A component with one head (or one measurement) makes at most one match, its cheapest
+    # pair: matching costs w (+ corner, the rest unmatched as they would be anyway), leaving it
+    # costs 2 * unmatched; ties go to the match, as the solver's would.
+    component = pair_label[order[starts]]
+    single = np.minimum(head_count[component], measurement_count[component]) == 1
+    cheapest = order[starts[single]]
+    take = weight[cheapest] + corner_weight <= 2 * unmatched_weight
+    result[head[cheapest[take]]] = measurement[cheapest[take]]
 
-    for start, end in zip(starts[~single], ends[~single]):
-        pairs = order[start:end]
-        heads, local_head = np.unique(head[pairs], return_inverse=True)
-        measurements, local_measurement = np.unique(measurement[pairs], return_inverse=True)
-        local = solve_dense(
-            heads.size,
-            measurements.size,
-            local_head,
-            local_measurement,
-            weight[pairs],
-            unmatched_weight,
-            corner_weight,
-        )
-        matched = local != UNASSIGNED
-        result[heads[matched]] = measurements[local[matched]]
+    # The other components together in one sparse solve: they do not interact.
+    multi = np.repeat(~single, ends - starts)
+    if multi.any():
+        pairs = order[multi]
+        joint = solve_sparse(n_heads, n_measurements, head[pairs], measurement[pairs], weight[pairs], unmatched_weight, corner_weight)
+        involved = np.unique(head[pairs])
+        result[involved] = joint[involved]
     return result
+
+
+def solve_sparse(
+    n_heads: int,
+    n_measurements: int,
+    head: np.ndarray,
+    measurement: np.ndarray,
+    weight: np.ndarray,
+    unmatched_weight: float,
+    corner_weight: float = 0.0,
+) -> np.ndarray:
+    """The same optimum as :func:`solve_dense` from a sparse augmented matrix (LAPJVsp).
+
+    Only the diagonals of the slave and false-track blocks are kept, and false-track/slave
+    entries only where the transposed head-measurement pair is allowed: any set of matched
+    pairs then still completes to a full assignment of the same cost (the matched heads'
+    slaves go to the matched measurements' false tracks), so nothing optimal is lost.
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        For each head, the index of its measurement, or ``UNASSIGNED`` (-1) for a slave.
+    """
+    heads, measurements = np.arange(n_heads), np.arange(n_measurements)
+    rows = np.concatenate((head, heads, n_heads + measurements, n_heads + measurement))
+    columns = np.concatenate((measurement, n_measurements + heads, measurements, n_measurements + head))
+    values = np.concatenate(
+        (weight, np.full(n_heads + n_measurements, unmatched_weight), np.full(head.size, corner_weight))
+    )
+    # Every full assignment has m + M entries, so a common shift keeps the optimum; the sparse
+    # solver needs non-zero weights.
+    values = values + (1.0 - values.min())
+    size = n_heads + n_measurements
+    _, column = min_weight_full_bipartite_matching(csr_matrix((values, (rows, columns)), shape=(size, size)))
+    column = column[:n_heads]
+    return np.where(column < n_measurements, column, UNASSIGNED).astype(np.int64)

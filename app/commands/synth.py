@@ -40,9 +40,9 @@ def add_parser(subparsers) -> None:
         help="random smooth point trajectories (Chetverikov's point set motion generator)",
         description="Draw point trajectories as Chetverikov's PSMG does (uniform start and direction, normal "
         "speed, Gaussian steps of speed and direction, speed clipped to [0, --max-speed]); keep only those that "
-        "stay in the view for every frame, and hide points at random. Write DIR/points.csv (frame,x,y; the "
+        "stay in the view for every frame (or, with --entry-exit, pass through it), and hide points at random. Write DIR/points.csv (frame,x,y; the "
         "measured points, shuffled within each frame) and DIR/truth.csv (track_id,frame,x,y,interpolated; "
-        "interpolated=1 where the point was hidden). Frames are 0-based, positions in pixels. The same "
+        "interpolated=1 where the point was hidden; no row where it is out of view). Frames are 0-based, positions in pixels. The same "
         "options and --seed give the same files.",
     )
     psmg.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
@@ -52,6 +52,13 @@ def add_parser(subparsers) -> None:
         default = getattr(BASE, name)
         psmg.add_argument(f"--{option.replace('_', '-')}", type=float, default=default, help=f"{text} (default {default:g})")
     psmg.add_argument("--max-speed", type=float, default=None, metavar="PX", help="largest speed, pixels/frame (default twice --mean-speed)")
+    psmg.add_argument("--max-gap", type=int, default=1, metavar="N", help="longest occlusion, frames; each lasts 1 to N (default 1)")
+    psmg.add_argument(
+        "--entry-exit",
+        action="store_true",
+        help="let points enter and leave the view (trajectories in view in at least 3 frames); default: every "
+        "trajectory stays in view throughout",
+    )
     psmg.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     psmg.set_defaults(run=run)
 
@@ -75,7 +82,14 @@ def psmg_spec(args: argparse.Namespace) -> PSMGSpec:
     if args.tracks < 1 or args.frames < 2:
         raise UsageError(f"need at least 1 track and 2 frames, got --tracks {args.tracks} --frames {args.frames}")
     try:
-        return PSMGSpec(trajectories=args.tracks, frames=args.frames, random_seed=args.seed, **values)
+        return PSMGSpec(
+            trajectories=args.tracks,
+            frames=args.frames,
+            max_gap=args.max_gap,
+            entry_exit=args.entry_exit,
+            random_seed=args.seed,
+            **values,
+        )
     except ValueError as error:
         raise UsageError(str(error)) from None
 

@@ -21,7 +21,12 @@ from ..progress import progress_bar
 from .run import add_tracker_options
 
 POINT_COLUMNS = ("frame", "x", "y")
-FIRST_LINKS = {"lookahead": "lookahead", "nearest": "im1"}
+# How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
+FIRST_LINKS = {
+    "lookahead": {},
+    "nearest": {"initialisation": "im1"},
+    "paper": {"initialisation": "im1", "restart_lost": False},
+}
 # Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
 _GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links")
 
@@ -37,10 +42,11 @@ which nothing was measured: speeds are per frame number, and tracks bridge it wi
 rows. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
 
 Algorithms: goa-updown (default) initialises itself, tracks forwards, then backwards from the
-forward pass's last links. goa is the paper's single forward pass from given first links; here they
-are the links between the first two frames that --first-links chooses. Both keep one track per point
-of the first frame. nn, ss, rs and ipan are the paper's comparison trackers; they start and end
-tracks anywhere and take only --max-speed.
+forward pass's last links (and from last-frame points the forward pass lost, see --first-links).
+goa is the paper's single forward pass from given first links; here they are the links between the
+first two frames that --first-links chooses. Both start one track per point of the first frame, and
+points no track takes are left out. nn, ss, rs and ipan are the paper's comparison trackers; they
+start and end tracks anywhere and take only --max-speed.
 
 Without --max-speed there is no speed limit: the smoothness limit --phi-max bounds a moving point
 and the first links are chosen among each point's nearest neighbours, which suits data whose speed
@@ -84,8 +90,11 @@ def add_parser(subparsers) -> None:
         "--first-links",
         choices=tuple(FIRST_LINKS),
         default=None,
-        help="first links (frames 1-2): lookahead (default) scores each by the smoothest path it starts over "
-        "the next five frames; nearest is the paper's optimal nearest-neighbour assignment",
+        help="how tracks start: lookahead (default) scores each first link by the smoothest path it starts "
+        "over the next five frames, and GOA-updown's backward pass also starts tracks from last-frame points "
+        "its forward pass lost; nearest takes the first links by optimal nearest-neighbour assignment, as the "
+        "paper does; paper is nearest with the paper's backward pass, which starts only from the forward "
+        "pass's last links",
     )
     # phi_max left unset tells a GOA option given to another tracker from one left at its default.
     parser.set_defaults(run=run, phi_max=None)
@@ -149,7 +158,7 @@ def goa_config(args: argparse.Namespace) -> GOAConfig:
         "individual": IndividualModel(args.individual_model or "im2"),
         "combined": CombinedModel(args.combined_model or "cm1"),
         "d_max": args.max_speed,
-        "initialisation": FIRST_LINKS[args.first_links or "lookahead"],
+        **FIRST_LINKS[args.first_links or "lookahead"],
     }
     if args.phi_max is not None:
         options["phi_max"] = args.phi_max

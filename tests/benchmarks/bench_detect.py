@@ -26,14 +26,18 @@ def scene(width: int, height: int, n_seeds: int, rng: np.random.Generator) -> np
     return np.clip(frame + noise, 0, 255).astype(np.uint8)
 
 
-def frames_per_second(frames: list[np.ndarray], options: BlobOptions, repeats: int = 5) -> float:
-    """Median frames/s of :func:`detect_blobs` over ``repeats`` passes through ``frames``."""
+def frames_per_second(frames: list[np.ndarray], options: BlobOptions, clock=time.process_time, repeats: int = 5) -> float:
+    """Median frames/s of :func:`detect_blobs` over ``repeats`` passes through ``frames``.
+
+    The default clock is this process's CPU time, which a busy shared machine does not inflate
+    the way it inflates wall-clock time.
+    """
     rates = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         for frame in frames:
             detect_blobs(frame, options)
-        rates.append(len(frames) / (time.perf_counter() - start))
+        rates.append(len(frames) / (clock() - start))
     return statistics.median(rates)
 
 
@@ -44,7 +48,11 @@ def main() -> None:
         frames = [scene(width, height, 80, rng) for _ in range(20)]
         once = frames_per_second(frames, BlobOptions(polarity="dark"))
         every = frames_per_second(frames, BlobOptions())
-        print(f"detect {width}x{height}: {once:.0f} frames/s median, {every:.0f} deciding polarity per frame (goal {goal})")
+        wall = frames_per_second(frames, BlobOptions(polarity="dark"), clock=time.perf_counter)
+        print(
+            f"detect {width}x{height}: {once:.0f} frames per CPU second (median), {every:.0f} deciding polarity "
+            f"per frame; {wall:.0f} frames/s by the wall clock (goal {goal})"
+        )
 
 
 if __name__ == "__main__":
