@@ -124,8 +124,11 @@ def first_links(
         if d_max is not None:
             ok &= next_speed <= d_max
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
-        # A link into a measured point may go on through a slave; one slave in a row at most.
-        into_measured = np.flatnonzero(target < frames[step].shape[0])
+        # A link into a measured point may go on through a slave (one in a row at most), unless a
+        # measured continuation already costs less than the slave would.
+        smooth = np.zeros(origin.size, bool)
+        smooth[link_in[triplet_cost < slave_cost]] = True
+        into_measured = np.flatnonzero((target < frames[step].shape[0]) & ~smooth)
         slaves = frames[step + 1].shape[0] + np.arange(into_measured.size)
         points[step + 1] = np.concatenate((points[step + 1], middle[into_measured] + move[into_measured]))
         link_in = np.concatenate((link_in, into_measured))
