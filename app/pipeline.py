@@ -183,7 +183,15 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
     """Per-pixel median of up to 64 frames spread evenly over the processed range."""
     spread = settings.step * max(1, math.ceil((source.frame_count or _BACKGROUND_FRAMES) / _BACKGROUND_FRAMES))
     with open_frames(path, start=settings.start, end=settings.end, step=spread) as sample:
-        return temporal_median((to_gray(image) for _, image in sample), _BACKGROUND_FRAMES)
+        total = min(sample.frame_count, _BACKGROUND_FRAMES) if sample.frame_count is not None else None
+        with progress_bar(total, "background") as bar:
+
+            def grey_frames():
+                for _, image in sample:
+                    bar.update(1)
+                    yield to_gray(image)
+
+            return temporal_median(grey_frames(), _BACKGROUND_FRAMES)
 
 
 def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:

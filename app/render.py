@@ -58,6 +58,26 @@ def to_fixed(points: np.ndarray) -> np.ndarray:
     return np.round(np.asarray(points) * (1 << SHIFT)).astype(np.int32)
 
 
+def track_links(present: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every link of a track set: each position joined to the same track's previous position.
+
+    A track with frames missing (a file written every few frames, or a tool that bridges gaps)
+    is linked across the gap rather than broken.
+
+    Parameters
+    ----------
+    present : ndarray of bool, shape (n_tracks, n_frames)
+
+    Returns
+    -------
+    rows, starts, ends : ndarray of int, shape (K,)
+        Track row, and the columns where each link starts and ends.
+    """
+    rows, columns = np.nonzero(present)
+    same = rows[1:] == rows[:-1]
+    return rows[1:][same], columns[:-1][same], columns[1:][same]
+
+
 @dataclass(frozen=True)
 class View:
     """The part of the input frame shown and its enlargement.
@@ -158,7 +178,7 @@ class TrackLayer:
     colour : tuple of int, optional
         One BGR colour for every track (comparisons); by default each track's :func:`track_colour`.
     warnings : ndarray of bool, shape (n_tracks, n_frames), optional
-        Links drawn in the warning colour: ``warnings[t, c]`` marks the link from column c - 1 to c.
+        Links drawn in the warning colour: ``warnings[t, c]`` marks the link ending at column c.
     frame_indices : ndarray of int, optional
         0-based clip frame index of each column; by default column c is ``tracks.first_frame + c``.
     """
@@ -207,7 +227,7 @@ class TrackLayer:
         return column if column < len(self.frame_indices) and self.frame_indices[column] == frame_index else None
 
     def segments(self, low: int, high: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Links between present positions from column ``low`` to column ``high``.
+        """Links between present positions from column ``low`` to column ``high`` (see :func:`track_links`).
 
         Returns
         -------
@@ -218,10 +238,10 @@ class TrackLayer:
         points : ndarray of int32, shape (K, 2, 2)
             Fixed-point start and end of each link.
         """
-        a, b = self.xy[:, low:high], self.xy[:, low + 1 : high + 1]
-        rows, offset = np.nonzero(~np.isnan(a[..., 0]) & ~np.isnan(b[..., 0]))
-        points = np.stack([a[rows, offset], b[rows, offset]], axis=1)
-        return rows, offset + low + 1, to_fixed(points)
+        window = self.xy[:, low : high + 1]
+        rows, starts, ends = track_links(~np.isnan(window[..., 0]))
+        points = np.stack([window[rows, starts], window[rows, ends]], axis=1)
+        return rows, ends + low, to_fixed(points)
 
     def draw(self, canvas: np.ndarray, frame_index: int, style: Style) -> None:
         """Draw trails, heads, marks and ids of frame ``frame_index`` onto ``canvas`` in place."""

@@ -20,12 +20,14 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     Raises
     ------
     DataError
-        If the target's folder does not exist or cannot be written.
+        If the target's folder does not exist or cannot be written, or the target is a folder.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise DataError(target, f"folder {folder} does not exist")
+    if target.is_dir():
+        raise DataError(target, "is a folder; give a file name")
     try:
         handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=folder)
     except OSError as error:

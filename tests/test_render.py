@@ -266,3 +266,34 @@ def test_ctrl_c_leaves_no_partial_file(clip, tmp_path, capsys, monkeypatch, name
     assert status == 130 and "interrupted" in err
     left = sorted(path.name for path in tmp_path.rglob("*") if path.is_file())
     assert left == kept
+
+
+def test_tracks_with_missing_frames_are_linked_across_the_gap():
+    # A file written every other frame: frames 0, 2, 4 of one track, 1 and 2 of another.
+    xy = np.full((2, 5, 2), np.nan)
+    xy[0, [0, 2, 4]] = [[10, 10], [20, 10], [30, 10]]
+    xy[1, [1, 2]] = [[50, 40], [52, 40]]
+    layer = TrackLayer(Tracks(xy=xy, measurement=np.zeros((2, 5), int)), View.of((64, 48)), trail=4)
+    rows, ends, points = layer.segments(0, 4)
+    assert sorted(zip(rows.tolist(), ends.tolist())) == [(0, 2), (0, 4), (1, 2)]
+    starts = {(row, end): tuple(point[0] / 16) for row, end, point in zip(rows, ends, points)}
+    assert starts[(0, 4)] == (20, 10)
+
+
+def test_disagreement_across_a_gap():
+    xy = np.full((2, 5, 2), np.nan)
+    xy[0, [0, 2, 4]] = [[10, 10], [20, 10], [30, 10]]
+    xy[1, [0, 2, 4]] = [[10, 30], [20, 30], [30, 30]]
+    truth = Tracks(xy=xy, measurement=np.zeros((2, 5), int))
+    wrong = swapped(truth, 4)
+    expected = np.zeros((2, 5), bool)
+    expected[:, 4] = True
+    np.testing.assert_array_equal(disagreeing_links(wrong, truth, 1.0), expected)
+
+
+def test_compare_with_tracks_past_the_video_is_one_line_exit_2(clip, tmp_path, capsys):
+    out = tmp_path / "compare.mp4"
+    status = main(["compare", str(clip / "clip.mp4"), str(clip / "truth.csv"), str(_outside(tmp_path)), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and err.count("\n") == 1 and "late.csv" in err and "lie outside the video" in err
+    assert not out.exists()

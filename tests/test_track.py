@@ -161,6 +161,12 @@ def test_track_bad_limits_are_one_line_exit_2_nothing_written(tmp_path, capsys, 
     assert not (tmp_path / "tracks.csv").exists()
 
 
+def test_track_output_that_is_a_folder_is_one_line_exit_2(tmp_path, capsys):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS)
+    _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path], "is a folder; give a file name")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]
+
+
 TRUTH = "track_id,frame,x,y\n0,0,1,1\n0,1,2,1\n"
 
 

@@ -52,8 +52,9 @@ class GOAConfig:
     initialisation : {"lookahead", "im1"}
         How GOA-updown picks the first links. "im1" is the paper's: optimal nearest-neighbour
         assignment of frames 0 and 1. "lookahead" (default) scores each frame 0-1 link by the
-        smoothest path it starts over ``lookahead`` frames (see ``tracking.initialisation``),
-        so that on a turning dish the shifted nearest-neighbour pairing is not chosen.
+        smoothest path it starts over ``lookahead`` frames, mixed with 0.3 of its
+        nearest-neighbour cost (see ``tracking.initialisation``), so that on a turning dish the
+        shifted nearest-neighbour pairing is not chosen.
     lookahead : int
         Frames spanned by the paths that score the first links (3 = one triplet).
     neighbours : int

@@ -13,7 +13,7 @@ from tracking.tracks import Tracks
 
 from ..errors import UsageError
 from ..frame_output import write_frames
-from ..render import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate
+from ..render import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
 from .render import add_view_options, check_view_options, open_range
 
 DEFAULT_TOLERANCE = 3.0
@@ -25,7 +25,7 @@ def add_parser(subparsers) -> None:
         help="draw two track sets over the clip, where they disagree in a warning colour",
         description="Draw track sets A and B (truth and result, or two trackers; any track format) over INPUT, side by "
         "side or overlaid. Points of the two sets are matched frame by frame within --tol; a link of one set "
-        "(frame k to k+1) disagrees with the other set when its two points are not matched to one and the same "
+        "(a point to the same track's next point) disagrees with the other set when its two points are not matched to one and the same "
         "track there, and is drawn in yellow.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
@@ -54,14 +54,14 @@ def disagreeing_links(tracks: Tracks, other: Tracks, tolerance: float) -> np.nda
     Returns
     -------
     ndarray of bool, shape (tracks.n_tracks, tracks.n_frames)
-        True at column c when the track has points at c - 1 and c and they are not both matched
-        to the same track of ``other``.
+        True at the column where a link (see :func:`app.render.track_links`) ends when its two
+        points are not both matched to the same track of ``other``.
     """
     matched = match_points(tracks, other, tolerance)
-    present = tracks.present
-    differ = (matched[:, 1:] != matched[:, :-1]) | (matched[:, 1:] == UNMATCHED)
-    warnings = np.zeros(present.shape, bool)
-    warnings[:, 1:] = present[:, 1:] & present[:, :-1] & differ
+    rows, starts, ends = track_links(tracks.present)
+    differ = (matched[rows, starts] != matched[rows, ends]) | (matched[rows, ends] == UNMATCHED)
+    warnings = np.zeros(tracks.present.shape, bool)
+    warnings[rows[differ], ends[differ]] = True
     return warnings
 
 
@@ -93,8 +93,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _links(tracks: Tracks) -> int:
-    present = tracks.present
-    return int((present[:, 1:] & present[:, :-1]).sum())
+    return len(track_links(tracks.present)[0])
 
 
 def _side_by_side(source, view: View, left, right):
