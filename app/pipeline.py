@@ -24,6 +24,7 @@ from detection.roi import Circle, circle_mask, dish_mask
 from detection.spots import detect_spots
 from tracking.goa import GOAConfig, goa_updown, pass_steps
 from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
+from tracking.regime import choose_motion, fit_motion
 from tracking.tracks import Tracks
 
 from .errors import UsageError
@@ -194,6 +195,17 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
             return temporal_median(grey_frames(), _BACKGROUND_FRAMES)
 
 
+def motion_config(frames: list[np.ndarray], config: GOAConfig, motion: str, keep_model: bool = False) -> GOAConfig:
+    """``config`` fitted to the motion of the points (:func:`tracking.regime.choose_motion`;
+    ``motion`` is "auto", "smooth" or "random"), saying on standard output what was chosen and why.
+    ``keep_model`` keeps ``config``'s individual model (the user chose it)."""
+    choice = choose_motion(frames, motion)
+    fitted = fit_motion(config, choice, keep_model)
+    limit = "no speed limit" if fitted.d_max is None else f"speed limit {fitted.d_max:.2f} px/frame"
+    print(f"motion: {choice.reason}; tracking with {fitted.individual.name.upper()}, {limit}")
+    return fitted
+
+
 def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
     """GOA-updown with a progress bar: open (tracks start and end anywhere) or, with ``lifecycle``
     None, the paper's fixed count of tracks. ``first_frame`` is the 0-based index of ``frames[0]``."""
@@ -245,10 +257,12 @@ def run_pipeline(
     config: GOAConfig,
     lifecycle: LifecycleConfig | None = LifecycleConfig(),
     min_length: int = 0,
+    motion: str = "auto",
 ) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Tracking is :func:`link_frames` with ``lifecycle``; tracks spanning fewer than ``min_length``
+    Tracking is :func:`link_frames` with ``lifecycle`` and ``config`` fitted to ``motion`` (see
+    :func:`motion_config`); tracks spanning fewer than ``min_length``
     frames are not written.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
@@ -258,6 +272,7 @@ def run_pipeline(
     found = detect_clip(clip, settings)
     detections = found.detections
     write_table(out / "detections.csv", detections.to_rows())
+    config = motion_config(detections.points, config, motion)
     tracks = drop_short(link_frames(detections.points, config, lifecycle), min_length)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
     render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)

@@ -162,17 +162,25 @@ class IndividualModel:
         IM1 nearest neighbour, IM2 smooth motion (Sethi-Jain), IM3 proximal uniformity.
     w1, w2 : float
         IM2 weights of direction and speed (the paper's rotating-dish values 0.1 and 0.9).
+    power : {1, 2}
+        IM1 exponent of the distance: 1 as in the paper, 2 for random walks, whose Gaussian
+        steps make the sum of squared distances the negative log-likelihood of an assignment;
+        across a gap of g frames the squared distance is divided by g (the variance grows
+        with g), not by g squared.
     """
 
     name: str = "im2"
     w1: float = 0.1
     w2: float = 0.9
+    power: int = 1
 
     def __post_init__(self) -> None:
         if self.name not in ("im1", "im2", "im3"):
             raise ValueError(f"unknown individual model {self.name!r}; choose im1, im2 or im3")
         if self.w1 < 0 or self.w2 < 0 or self.w1 + self.w2 == 0:
             raise ValueError("IM2 weights must be non-negative and not both zero")
+        if self.power not in (1, 2):
+            raise ValueError(f"IM1 power must be 1 or 2, got {self.power}")
 
     @property
     def order(self) -> int:
@@ -195,7 +203,7 @@ class IndividualModel:
         """
         fallback = phi_max * nearest_neighbour_cost(candidates, d_max)
         if self.name == "im1":
-            return fallback
+            return fallback if self.power == 1 else phi_max * nearest_neighbour_cost(candidates, d_max) ** 2 * candidates.gap
         if self.name == "im3":
             return proximal_uniformity_cost(candidates)
         history = candidates.has_history

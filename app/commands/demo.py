@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     prepare_output_folder(args.out)
     scene = write_dish_clip(spec, args.out)
-    run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length)
+    run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length, args.motion)
     result = read_tracks(args.out / "tracks.csv")
     scores = score_tracks(result, scene.truth, args.tol)
     print(

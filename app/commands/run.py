@@ -7,6 +7,7 @@ from pathlib import Path
 
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig
+from tracking.regime import MOTIONS
 
 from ..errors import UsageError
 from ..pipeline import run_pipeline
@@ -22,6 +23,14 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="PX",
         help="largest speed in pixels/frame (d_max); default: no limit, the motion model decides",
+    )
+    group.add_argument(
+        "--motion",
+        choices=MOTIONS,
+        default="auto",
+        help="how the points move: smooth (keep their direction; smooth-motion model IM2), random (Brownian "
+        "or jitter; nearest neighbour IM1 within a speed limit estimated from the data unless --max-speed), "
+        "or auto (default): measured from the steps that cannot be wrong, printed on the first line",
     )
     group.add_argument(
         "--phi-max",
@@ -105,7 +114,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     settings = detection_settings(args)
     config, lifecycle = tracker_config(args), lifecycle_config(args)
-    detections, tracks = run_pipeline(args.input, args.out, settings, config, lifecycle, args.min_length)
+    detections, tracks = run_pipeline(args.input, args.out, settings, config, lifecycle, args.min_length, args.motion)
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
         f"{len(detections.columns)} frames, {measured} detections, {tracks.n_tracks} tracks; "

@@ -18,7 +18,7 @@ from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
 
 from ..errors import UsageError
-from ..pipeline import link_frames
+from ..pipeline import link_frames, motion_config
 from ..progress import progress_bar
 from .run import add_tracker_options, lifecycle_config
 
@@ -31,7 +31,7 @@ FIRST_LINKS = {
 }
 # Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
 _GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
-_GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links")
+_GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links", "motion")
 # Options of the open GOA-updown (the default) alone.
 _OPEN_ONLY = ("max_gap", "fixed_count")
 
@@ -109,7 +109,7 @@ def add_parser(subparsers) -> None:
         "pass's last links",
     )
     # phi_max left unset tells a GOA option given to another tracker from one left at its default.
-    parser.set_defaults(run=run, phi_max=None)
+    parser.set_defaults(run=run, phi_max=None, motion=None)
 
 
 @dataclass(frozen=True)
@@ -204,14 +204,14 @@ def track_points(points: Points, args: argparse.Namespace) -> Tracks:
     tracks shorter than --min-length."""
     frames, first = points.frames, points.first_frame
     if args.algorithm not in _GOA_FAMILY:
-        tracks = run_tracker(args.algorithm, frames, args.max_speed, first)
-    elif args.algorithm == "goa":
-        config = goa_config(args)
+        return drop_short(run_tracker(args.algorithm, frames, args.max_speed, first), args.min_length)
+    config = motion_config(frames, goa_config(args), args.motion or "auto", keep_model=args.individual_model is not None)
+    if args.algorithm == "goa":
         with progress_bar(len(frames) - 2, "tracking", unit="step") as bar:
             tracks = goa(frames, initial_links(frames, config), config, first, progress=bar.update)
     else:
         lifecycle = None if args.algorithm == "goa-updown-fixed" else lifecycle_config(args)
-        tracks = link_frames(frames, goa_config(args), lifecycle, first)
+        tracks = link_frames(frames, config, lifecycle, first)
     return drop_short(tracks, args.min_length)
 
 
