@@ -1,0 +1,128 @@
+"""Choosing the motion model from the measurements: smooth, noisy or random motion."""
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from data.csvio import write_table
+from data.dish import DishSpec, make_dish_scene
+from data.trackfile import read_tracks
+from data.psmg import PSMGSpec, generate_psmg
+from tracking.goa import GOAConfig
+from tracking.metrics import score_tracks
+from tracking.motion import IndividualModel
+from tracking.regime import choose_motion, fit_motion, step_sigma
+from tracking.tracks import Tracks
+
+
+def walkers(count=300, sigma=1.5, drift=(0.0, 0.0), frames=20, size=512.0, seed=1):
+    """Random walkers in a square field, with their truth (every point seen in every frame)."""
+    rng = np.random.default_rng(seed)
+    start = rng.uniform(0, size, (count, 1, 2))
+    steps = rng.normal(0, sigma, (count, frames, 2)) + np.asarray(drift)
+    steps[:, 0] = 0
+    xy = start + np.cumsum(steps, axis=1)
+    measurement = np.tile(np.arange(count)[:, None], (1, frames))
+    # Measurement order within a frame must not follow the track order.
+    order = [rng.permutation(count) for _ in range(frames)]
+    points = [xy[order[k], k] for k in range(frames)]
+    for k in range(frames):
+        measurement[order[k], k] = np.arange(count)
+    return points, Tracks(xy, measurement)
+
+
+def test_random_walkers_get_nearest_neighbour_and_a_speed_limit_from_their_steps():
+    points, _ = walkers(sigma=1.5)
+    choice = choose_motion(points)
+    assert choice.individual_model == "im1"
+    assert abs(choice.persistence) < 0.2
+    # 4 sigma of 1.5 px/axis, from steps seen only where they are unambiguous.
+    assert 5.4 < choice.max_speed < 6.6
+    assert choice.reason.startswith("random motion")
+
+
+def test_flow_with_diffusion_is_tracked_as_noisy_not_smooth():
+    points, _ = walkers(sigma=1.0, drift=(3.0, 0.0))
+    choice = choose_motion(points)
+    assert choice.individual_model == "im1" and choice.persistence > 0.8
+    assert choice.reason.startswith("noisy motion")
+    assert 6.0 < choice.max_speed < 8.0
+
+
+@pytest.mark.parametrize("rim_speed", [5.0, 42.0])
+def test_a_turning_dish_keeps_the_smooth_motion_model(rim_speed):
+    scene = make_dish_scene(DishSpec(seeds=80, frames=10, rim_speed=rim_speed, random_seed=2))
+    points = [scene.truth.xy[:, k] for k in range(10)]
+    choice = choose_motion(points)
+    assert (choice.individual_model, choice.max_speed) == ("im2", None), choice.reason
+
+
+def test_smooth_psmg_keeps_the_smooth_motion_model():
+    frames, _ = generate_psmg(PSMGSpec(trajectories=100, frames=20, random_seed=4))
+    choice = choose_motion(frames)
+    assert (choice.individual_model, choice.max_speed) == ("im2", None)
+    assert choice.persistence > 0.9
+
+
+def test_too_few_points_to_tell_keep_the_default():
+    points, _ = walkers(count=5, frames=4)
+    choice = choose_motion(points)
+    assert choice.individual_model == "im2" and "need 30" in choice.reason
+
+
+def test_motion_can_be_told_instead_of_measured():
+    frames, _ = generate_psmg(PSMGSpec(trajectories=100, frames=20, random_seed=4))
+    assert choose_motion(frames, "random").individual_model == "im1"
+    walking, _ = walkers()
+    assert choose_motion(walking, "smooth").individual_model == "im2"
+    with pytest.raises(ValueError, match="motion must be one of"):
+        choose_motion(walking, "brownian")
+
+
+def test_fit_motion_keeps_what_the_user_set():
+    walking, _ = walkers()
+    choice = choose_motion(walking)
+    fitted = fit_motion(GOAConfig(), choice)
+    assert fitted.individual == IndividualModel("im1", power=2) and fitted.d_max == choice.max_speed
+    assert fitted.initialisation == "im1"
+    mine = fit_motion(GOAConfig(individual=IndividualModel("im3"), d_max=9.0), choice, keep_model=True)
+    assert mine.individual.name == "im3" and mine.d_max == 9.0
+    smooth = choose_motion(walking, "smooth")
+    assert fit_motion(GOAConfig(), smooth) == GOAConfig()
+
+
+def test_step_sigma_undoes_the_cut_at_each_steps_bound():
+    rng = np.random.default_rng(0)
+    lengths = np.hypot(*rng.normal(0, 2.0, (2, 20000)))
+    bound = rng.uniform(1.0, 4.0, lengths.size)
+    kept = lengths < bound
+    # The kept steps alone are biased short; the truncated fit is not.
+    assert np.sqrt(np.mean(lengths[kept] ** 2) / 2) < 1.4
+    assert step_sigma(lengths[kept], bound[kept]) == pytest.approx(2.0, rel=0.05)
+
+
+def _write_points(path, points):
+    frame = np.concatenate([np.full(len(p), k) for k, p in enumerate(points)])
+    xy = np.concatenate(points)
+    write_table(path, {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
+
+
+def test_track_with_default_options_follows_random_walkers(tmp_path, capsys):
+    points, truth = walkers(count=200, sigma=1.5, frames=15)
+    _write_points(tmp_path / "points.csv", points)
+    scores = {}
+    for motion in ("auto", "smooth"):
+        out = tmp_path / f"{motion}.csv"
+        assert main(["track", str(tmp_path / "points.csv"), "--out", str(out), "--motion", motion]) == 0
+        scores[motion] = score_tracks(read_tracks(out), truth)
+    assert capsys.readouterr().out.startswith("motion: random motion")
+    # The smooth-motion model links random walkers to their neighbours; measuring the motion first does not.
+    assert scores["auto"].link_error < 0.02 < 0.3 < scores["smooth"].link_error
+
+
+def test_motion_is_refused_by_trackers_that_do_not_read_it(tmp_path, capsys):
+    points, _ = walkers(count=20, frames=3)
+    _write_points(tmp_path / "points.csv", points)
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv"), "--algorithm", "nn", "--motion", "random"]) == 2
+    assert "--motion only apply to --algorithm goa or goa-updown" in capsys.readouterr().err
+    assert not (tmp_path / "t.csv").exists()
