@@ -7,28 +7,16 @@ from app.cli import main
 from data.csvio import write_table
 from data.dish import DishSpec, make_dish_scene
 from data.trackfile import read_tracks
+from data.walkers import WalkerSpec, generate_walkers
 from data.psmg import PSMGSpec, generate_psmg
 from tracking.goa import GOAConfig
 from tracking.metrics import score_tracks
 from tracking.motion import IndividualModel
 from tracking.regime import choose_motion, fit_motion, step_sigma
-from tracking.tracks import Tracks
 
 
-def walkers(count=300, sigma=1.5, drift=(0.0, 0.0), frames=20, size=512.0, seed=1):
-    """Random walkers in a square field, with their truth (every point seen in every frame)."""
-    rng = np.random.default_rng(seed)
-    start = rng.uniform(0, size, (count, 1, 2))
-    steps = rng.normal(0, sigma, (count, frames, 2)) + np.asarray(drift)
-    steps[:, 0] = 0
-    xy = start + np.cumsum(steps, axis=1)
-    measurement = np.tile(np.arange(count)[:, None], (1, frames))
-    # Measurement order within a frame must not follow the track order.
-    order = [rng.permutation(count) for _ in range(frames)]
-    points = [xy[order[k], k] for k in range(frames)]
-    for k in range(frames):
-        measurement[order[k], k] = np.arange(count)
-    return points, Tracks(xy, measurement)
+def walkers(count=300, sigma=1.5, drift=(0.0, 0.0), frames=20):
+    return generate_walkers(WalkerSpec(walkers=count, frames=frames, sigma=sigma, drift=drift, random_seed=1))
 
 
 def test_random_walkers_get_nearest_neighbour_and_a_speed_limit_from_their_steps():
@@ -36,8 +24,8 @@ def test_random_walkers_get_nearest_neighbour_and_a_speed_limit_from_their_steps
     choice = choose_motion(points)
     assert choice.individual_model == "im1"
     assert abs(choice.persistence) < 0.2
-    # 4 sigma of 1.5 px/axis, from steps seen only where they are unambiguous.
-    assert 5.4 < choice.max_speed < 6.6
+    # 5 sigma of 1.5 px/axis, from steps seen only where they are unambiguous.
+    assert 6.8 < choice.max_speed < 8.2
     assert choice.reason.startswith("random motion")
 
 
@@ -46,7 +34,7 @@ def test_flow_with_diffusion_is_tracked_as_noisy_not_smooth():
     choice = choose_motion(points)
     assert choice.individual_model == "im1" and choice.persistence > 0.8
     assert choice.reason.startswith("noisy motion")
-    assert 6.0 < choice.max_speed < 8.0
+    assert 7.0 < choice.max_speed < 9.0
 
 
 @pytest.mark.parametrize("rim_speed", [5.0, 42.0])

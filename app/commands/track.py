@@ -60,9 +60,17 @@ that --first-links chooses. Points no track takes are left out. nn, ss, rs and i
 comparison trackers; they start and end tracks anywhere and take only --max-speed. --min-length
 applies to every algorithm.
 
-Without --max-speed there is no speed limit: the smoothness limit --phi-max bounds a moving point
-and the first links are chosen among each point's nearest neighbours, which suits data whose speed
-you do not know.
+The GOA family first measures how the points move (--motion auto, the default; the first line of
+output says what it found): from the links no motion could make wrong (mutual nearest neighbours much
+closer than any other point), chained over three frames, it tells smooth motion (steps keep their
+direction and speed: seeds on a turning dish) from noisy or random motion (Brownian beads, jitter,
+flow with diffusion). Smooth motion is tracked with the smooth-motion model IM2 and, without
+--max-speed, no speed limit: the smoothness limit --phi-max bounds a moving point and the first links
+are chosen among each point's nearest neighbours. Noisy or random motion is tracked by nearest
+neighbour (IM1 on squared distances, the likelihood of Gaussian steps) within a speed limit of the
+drift plus 5 sigma of the step noise, both estimated from those links, unless --max-speed or
+--individual-model says otherwise. When too few links are unambiguous to tell (fast or crowded
+scenes), smooth motion is assumed. --motion smooth or random skips the measurement.
 
 POINTS.csv must hold at least two frames; a file with only a header, a single frame, a missing
 column, or a value that is not a finite number is an error (exit 2, nothing written)."""
