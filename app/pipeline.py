@@ -24,7 +24,7 @@ from detection.roi import Circle, circle_mask, dish_mask
 from detection.spots import detect_spots
 from tracking.goa import GOAConfig, goa_updown, pass_steps
 from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
-from tracking.regime import choose_motion, fit_motion
+from tracking.regime import choose_motion, fit_motion, track_without_drift
 from tracking.tracks import Tracks
 
 from .errors import UsageError
@@ -195,15 +195,20 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
             return temporal_median(grey_frames(), _BACKGROUND_FRAMES)
 
 
-def motion_config(frames: list[np.ndarray], config: GOAConfig, motion: str, keep_model: bool = False) -> GOAConfig:
+def motion_config(
+    frames: list[np.ndarray], config: GOAConfig, motion: str, keep_model: bool = False
+) -> tuple[GOAConfig, tuple[float, float]]:
     """``config`` fitted to the motion of the points (:func:`tracking.regime.choose_motion`;
-    ``motion`` is "auto", "smooth" or "random"), saying on standard output what was chosen and why.
-    ``keep_model`` keeps ``config``'s individual model (the user chose it)."""
+    ``motion`` is "auto", "smooth" or "random"), and the drift to track without
+    (:func:`tracking.regime.track_without_drift`), pixels/frame; says on standard output what was
+    chosen and why. ``keep_model`` keeps ``config``'s individual model (the user chose it)."""
     choice = choose_motion(frames, motion)
-    fitted = fit_motion(config, choice, keep_model)
+    fitted, drift = fit_motion(config, choice, keep_model)
     limit = "no speed limit" if fitted.d_max is None else f"speed limit {fitted.d_max:.2f} px/frame"
+    if any(drift):
+        limit += f" about the drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame"
     print(f"motion: {choice.reason}; tracking with {fitted.individual.name.upper()}, {limit}")
-    return fitted
+    return fitted, drift
 
 
 def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
@@ -272,8 +277,9 @@ def run_pipeline(
     found = detect_clip(clip, settings)
     detections = found.detections
     write_table(out / "detections.csv", detections.to_rows())
-    config = motion_config(detections.points, config, motion)
-    tracks = drop_short(link_frames(detections.points, config, lifecycle), min_length)
+    config, drift = motion_config(detections.points, config, motion)
+    tracks = track_without_drift(detections.points, drift, lambda frames: link_frames(frames, config, lifecycle))
+    tracks = drop_short(tracks, min_length)
     write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
     render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
     return detections, tracks

@@ -12,7 +12,8 @@ from data.psmg import PSMGSpec, generate_psmg
 from tracking.goa import GOAConfig
 from tracking.metrics import score_tracks
 from tracking.motion import IndividualModel
-from tracking.regime import choose_motion, fit_motion, step_sigma
+from tracking.regime import choose_motion, fit_motion, step_sigma, track_without_drift
+from tracking.tracks import Tracks
 
 
 def walkers(count=300, sigma=1.5, drift=(0.0, 0.0), frames=20):
@@ -68,15 +69,30 @@ def test_motion_can_be_told_instead_of_measured():
 
 
 def test_fit_motion_keeps_what_the_user_set():
-    walking, _ = walkers()
+    walking, _ = walkers(drift=(1.0, 0.5))
     choice = choose_motion(walking)
-    fitted = fit_motion(GOAConfig(), choice)
-    assert fitted.individual == IndividualModel("im1", power=2) and fitted.d_max == choice.max_speed
-    assert fitted.initialisation == "im1"
-    mine = fit_motion(GOAConfig(individual=IndividualModel("im3"), d_max=9.0), choice, keep_model=True)
-    assert mine.individual.name == "im3" and mine.d_max == 9.0
-    smooth = choose_motion(walking, "smooth")
-    assert fit_motion(GOAConfig(), smooth) == GOAConfig()
+    fitted, drift = fit_motion(GOAConfig(), choice)
+    assert fitted.individual == IndividualModel("im1", power=2) and fitted.initialisation == "im1"
+    # The limit is about the drift, which is taken out of the positions.
+    assert fitted.d_max == choice.noise_limit < choice.max_speed and drift == choice.drift
+    assert drift == pytest.approx((1.0, 0.5), abs=0.2)
+    mine, kept_drift = fit_motion(GOAConfig(individual=IndividualModel("im3"), d_max=9.0), choice, keep_model=True)
+    assert mine.individual.name == "im3" and mine.d_max == 9.0 and kept_drift == (0.0, 0.0)
+    assert fit_motion(GOAConfig(), choose_motion(walking, "smooth")) == (GOAConfig(), (0.0, 0.0))
+
+
+def test_tracks_are_found_without_the_drift_and_returned_with_it():
+    frames = [np.array([[10.0 + 3 * k, 5.0]]) for k in range(4)]
+    seen = []
+
+    def track(moved):
+        seen.extend(moved)
+        xy = np.stack([f[0] for f in moved])[None]
+        return Tracks(xy, np.zeros((1, len(moved)), np.int64))
+
+    tracks = track_without_drift(frames, (3.0, 0.0), track)
+    assert all(np.array_equal(f, [[10.0, 5.0]]) for f in seen)
+    assert np.array_equal(tracks.xy[0], np.concatenate(frames))
 
 
 def test_step_sigma_undoes_the_cut_at_each_steps_bound():

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .motion import IndividualModel, smooth_motion_cost
+from .motion import Candidates, IndividualModel, smooth_motion_cost
 
 # Cost of a slave on a first-link path, as a share of phi_max.
 _SLAVE_SHARE = 0.15
@@ -86,6 +86,7 @@ def first_links(
         continued within phi_max pays phi_max for each triplet it lacks, so the link stays
         possible but loses to smooth alternatives.
     """
+    link_model = model
     if model.order == 1:
         model = IndividualModel("im2")
     if slave_cost is None:
@@ -98,8 +99,14 @@ def first_links(
     if d_max is not None:
         valid &= speed <= d_max
     head, measurement = head[valid], measurement[valid]
+    scale = d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)
+    if horizon < 3 and link_model.order == 1:
+        # The nearest-neighbour scheme alone: the model's own IM1 (its power and drift).
+        single = np.ones(head.size, np.int64)
+        pairs = Candidates(head, measurement, velocity[valid], single, np.full((head.size, 2), np.nan))
+        return head, measurement, link_model.cost(pairs, phi_max, scale)
     # IM1: dividing first keeps the fastest link at exactly phi_max, not a rounding step above.
-    nearest = phi_max * (speed[valid] / (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)))
+    nearest = phi_max * (speed[valid] / scale)
     if horizon < 3:
         return head, measurement, nearest
 

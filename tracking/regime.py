@@ -18,7 +18,7 @@ few links are unambiguous to tell (dense or fast scenes), the smooth-motion defa
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from .goa import GOAConfig
 from .motion import IndividualModel, smooth_motion_cost
+from .tracks import Tracks
 
 # A link is unambiguous when its length is below this fraction of the within-frame
 # nearest-neighbour distance of both its points: any other pairing is then at least
@@ -77,6 +78,10 @@ class MotionChoice:
         none.
     triplets : int
         Number of unambiguous three-frame chains measured.
+    drift : tuple of float
+        Mean step (x, y), pixels/frame, of random motion; (0, 0) otherwise.
+    noise_limit : float or None
+        Speed limit about the drift, pixels/frame: 5 sigma of the step noise (at least 1).
     reason : str
         One line saying why, for the user.
     """
@@ -86,6 +91,8 @@ class MotionChoice:
     persistence: float
     triplets: int
     reason: str
+    drift: tuple[float, float] = (0.0, 0.0)
+    noise_limit: float | None = None
 
 
 def unambiguous_links(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -240,23 +247,53 @@ def _random(
     return MotionChoice(
         "im1", max_speed, persistence, triplets,
         f"{why}, step sigma {sigma:.2f} px/axis, drift {np.linalg.norm(drift):.2f} px/frame; speed limit {max_speed:.2f} px/frame",
+        (float(drift[0]), float(drift[1])),
+        max(_MIN_SPEED, _SIGMAS * sigma),
     )
 
 
-def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False) -> GOAConfig:
+def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False) -> tuple[GOAConfig, tuple[float, float]]:
     """The tracker configuration for the motion chosen, keeping what the user set.
 
-    Random motion takes IM1 (unless ``keep_model``), nearest-neighbour first links and the
-    estimated speed limit (unless ``config.d_max`` is set); smooth motion leaves ``config`` as is.
+    Random motion takes IM1 on squared distances (unless ``keep_model``) and nearest-neighbour
+    first links. Without a speed limit in ``config`` it also takes the estimated one, and the
+    drift is to be removed from the positions before tracking (:func:`track_without_drift`), so
+    that the limit is 5 sigma of the noise alone and a track bridging a gap of g frames is
+    looked for g drift steps downstream. Smooth motion leaves ``config`` as is.
+
+    Returns
+    -------
+    config : GOAConfig
+    drift : tuple of float
+        Mean step (x, y) to remove, pixels/frame; (0, 0) for none.
     """
     if choice.individual_model != "im1":
-        return config
+        return config, (0.0, 0.0)
     changes: dict = {"initialisation": "im1"}
     if not keep_model:
         changes["individual"] = IndividualModel("im1", power=2)
+    drift = (0.0, 0.0)
     if config.d_max is None and choice.max_speed is not None:
-        changes["d_max"] = choice.max_speed
-    return replace(config, **changes)
+        changes["d_max"] = choice.noise_limit
+        drift = choice.drift
+    return replace(config, **changes), drift
+
+
+def track_without_drift(
+    frames: Sequence[np.ndarray], drift: tuple[float, float], track: Callable[[list[np.ndarray]], Tracks]
+) -> Tracks:
+    """Run ``track`` on the positions seen from a frame moving with ``drift`` (pixels/frame),
+    and put the drift back into the tracks it returns (interpolated positions included: a
+    straight line stays straight).
+
+    ``frames[k]`` is moved by ``-k * drift``; ``track`` must return tracks whose column k is
+    ``frames[k]``.
+    """
+    shift = np.asarray(drift, dtype=float)
+    if not shift.any():
+        return track(list(frames))
+    tracks = track([np.asarray(f, dtype=float).reshape(-1, 2) - k * shift for k, f in enumerate(frames)])
+    return replace(tracks, xy=tracks.xy + np.arange(tracks.n_frames)[None, :, None] * shift)
 
 
 def step_sigma(lengths: np.ndarray, reach: np.ndarray) -> float:

@@ -13,6 +13,7 @@ from data.csvio import TRACK_COLUMNS, read_table, write_table
 from data.errors import DataError
 from tracking.goa import GOAConfig, goa, initial_links
 from tracking.lifecycle import drop_short
+from tracking.regime import track_without_drift
 from tracking.motion import CombinedModel, IndividualModel
 from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
@@ -213,13 +214,20 @@ def track_points(points: Points, args: argparse.Namespace) -> Tracks:
     frames, first = points.frames, points.first_frame
     if args.algorithm not in _GOA_FAMILY:
         return drop_short(run_tracker(args.algorithm, frames, args.max_speed, first), args.min_length)
-    config = motion_config(frames, goa_config(args), args.motion or "auto", keep_model=args.individual_model is not None)
+    config, drift = motion_config(frames, goa_config(args), args.motion or "auto", keep_model=args.individual_model is not None)
     if args.algorithm == "goa":
-        with progress_bar(len(frames) - 2, "tracking", unit="step") as bar:
-            tracks = goa(frames, initial_links(frames, config), config, first, progress=bar.update)
+
+        def track(moved: list[np.ndarray]) -> Tracks:
+            with progress_bar(len(moved) - 2, "tracking", unit="step") as bar:
+                return goa(moved, initial_links(moved, config), config, first, progress=bar.update)
+
     else:
         lifecycle = None if args.algorithm == "goa-updown-fixed" else lifecycle_config(args)
-        tracks = link_frames(frames, config, lifecycle, first)
+
+        def track(moved: list[np.ndarray]) -> Tracks:
+            return link_frames(moved, config, lifecycle, first)
+
+    tracks = track_without_drift(frames, drift, track)
     return drop_short(tracks, args.min_length)
 
 

@@ -1,0 +1,129 @@
+"""Default options against trackpy and laptrack, from random walkers to a turning dish.
+
+Run as ``python tests/benchmarks/bench_motion.py [--runs N]``. Each scene is generated N times
+(seeds 0..N-1). seedtrack runs as ``seedtrack track`` does with no option at all (it measures the
+motion, then tracks open GOA-updown); trackpy (``link``, memory 0 and 3) and laptrack (gap closing
+over 2 frames) are given the speed limit a user who knows the data would choose: 4 sigma plus the
+drift for walkers, the generator's speed limit for PSMG, 1.1 x the rim speed for the dish. Prints
+the median IDF1 and link error (tolerance 1 px) and the median CPU seconds per run (medians over
+runs) of each tracker on each scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from typing import Callable
+
+import numpy as np
+
+from app.peers import PEERS, PeerFailure
+from data.dish import DishSpec, make_dish_scene
+from data.psmg import PSMGSpec, generate_psmg
+from data.walkers import WalkerSpec, generate_walkers
+from tracking.clear_mot import clear_mot
+from tracking.goa import GOAConfig
+from tracking.lifecycle import LifecycleConfig, goa_updown_open
+from tracking.metrics import score_tracks
+from tracking.regime import choose_motion, fit_motion, track_without_drift
+from tracking.tracks import Tracks
+
+Scene = tuple[list[np.ndarray], Tracks, float]
+
+
+def walkers(**options) -> Callable[[int], Scene]:
+    def make(seed: int) -> Scene:
+        spec = WalkerSpec(random_seed=seed, **options)
+        frames, truth = generate_walkers(spec)
+        return frames, truth, 4 * spec.sigma + float(np.hypot(*spec.drift))
+
+    return make
+
+
+def psmg(**options) -> Callable[[int], Scene]:
+    def make(seed: int) -> Scene:
+        spec = PSMGSpec(random_seed=seed, **options)
+        frames, truth = generate_psmg(spec)
+        return frames, truth, spec.speed_limit
+
+    return make
+
+
+def dish(seed: int) -> Scene:
+    spec = DishSpec(seeds=80, frames=20, rim_speed=42.0, random_seed=seed)
+    truth = make_dish_scene(spec).truth
+    return [truth.xy[:, k] for k in range(spec.frames)], truth, 1.1 * spec.rim_speed
+
+
+SCENES: dict[str, Callable[[int], Scene]] = {
+    "brownian sigma 0.5": walkers(sigma=0.5),
+    "brownian sigma 1.5": walkers(sigma=1.5),
+    "brownian sigma 3": walkers(sigma=3.0),
+    "brownian sigma 1.5, 5% missed": walkers(sigma=1.5, missed=0.05),
+    "flow 3 px/frame + sigma 1": walkers(sigma=1.0, drift=(3.0, 0.0)),
+    "PSMG 100 points, speed 5": psmg(trajectories=100, frames=20),
+    "PSMG entry/exit, 10% missed": psmg(trajectories=100, frames=20, entry_exit=True, occlusion=0.1),
+    "dish 80 seeds, rim 42": dish,
+}
+
+
+def seedtrack_default(frames: list[np.ndarray], _limit: float) -> Tracks:
+    """What ``seedtrack track`` does with no options."""
+    config, drift = fit_motion(GOAConfig(), choose_motion(frames))
+    return track_without_drift(frames, drift, lambda moved: goa_updown_open(moved, config, LifecycleConfig()))
+
+
+def trackpy_memory(frames: list[np.ndarray], limit: float) -> Tracks:
+    import trackpy
+
+    from app.peers import _table, _tracks
+
+    trackpy.quiet()
+    try:
+        linked = trackpy.link(_table(frames), limit, memory=3)
+    except Exception as error:  # as PEERS["trackpy"] does
+        raise PeerFailure(f"{type(error).__name__}: {error}") from None
+    return _tracks(linked, "particle", 0)
+
+
+TRACKERS: dict[str, Callable[[list[np.ndarray], float], Tracks]] = {
+    "seedtrack (no options)": seedtrack_default,
+    "trackpy": lambda frames, limit: PEERS["trackpy"](frames, limit, 0),
+    "trackpy memory 3": trackpy_memory,
+    "laptrack": lambda frames, limit: PEERS["laptrack"](frames, limit, 0),
+}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=3)
+    args = parser.parse_args()
+    print(f"| scene | tracker | IDF1 | link error | CPU s |  (medians of {args.runs} runs)")
+    print("|---|---|---|---|---|")
+    for scene_name, make in SCENES.items():
+        scenes = [make(seed) for seed in range(args.runs)]
+        for tracker_name, track in TRACKERS.items():
+            idf1, link, seconds = [], [], []
+            for frames, truth, limit in scenes:
+                start = time.process_time()
+                try:
+                    result = track(frames, limit)
+                except PeerFailure:
+                    continue
+                seconds.append(time.process_time() - start)
+                idf1.append(clear_mot(result, truth, 1.0).idf1)
+                link.append(score_tracks(result, truth, 1.0).link_error)
+            if not idf1:
+                print(f"| {scene_name} | {tracker_name} | failed | failed | |")
+                continue
+            failed = f" ({args.runs - len(idf1)} failed)" if len(idf1) < args.runs else ""
+            print(
+                f"| {scene_name} | {tracker_name} | {statistics.median(idf1):.3f}{failed} | "
+                f"{statistics.median(link):.4f} | {statistics.median(seconds):.2f} |",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
