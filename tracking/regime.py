@@ -246,7 +246,7 @@ def _random(
     max_speed = max(_MIN_SPEED, float(np.linalg.norm(drift)) + _SIGMAS * sigma)
     return MotionChoice(
         "im1", max_speed, persistence, triplets,
-        f"{why}, step sigma {sigma:.2f} px/axis, drift {np.linalg.norm(drift):.2f} px/frame; speed limit {max_speed:.2f} px/frame",
+        f"{why}, step sigma {sigma:.2f} px/axis, drift {np.linalg.norm(drift):.2f} px/frame",
         (float(drift[0]), float(drift[1])),
         max(_MIN_SPEED, _SIGMAS * sigma),
     )
