@@ -1,0 +1,59 @@
+"""Seeds hidden for several frames on a turning dish: how many come back on their own track.
+
+Run as ``python tests/benchmarks/bench_hidden.py [--clips N]``. The dish generator's seed
+positions (80 seeds, 30 frames, a quarter of them hidden once for 2, 5 or 10 frames in a row,
+optionally 5 seeds added and 5 removed mid-clip) are tracked as ``seedtrack track`` does with no
+option (the motion is measured, then open GOA-updown). Prints the seeds whose track follows them
+over every frame they are seen (strict trajectory merit at 0.5 px), mean over N clips.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+
+from data.dish import DishSpec, make_dish_scene
+from tracking.goa import GOAConfig
+from tracking.lifecycle import LifecycleConfig, goa_updown_open
+from tracking.metrics import score_tracks
+from tracking.regime import choose_motion, fit_motion, track_without_drift
+
+SEEDS = 80
+GAPS = (2, 5, 10)
+ROWS = (
+    ("5 px/frame", dict(rim_speed=5.0)),
+    ("10 px/frame", dict(rim_speed=10.0)),
+    ("20 px/frame", dict(rim_speed=20.0)),
+    ("5 px/frame, 5 seeds added and 5 removed", dict(rim_speed=5.0, added_seeds=5, removed_seeds=5)),
+    ("10 px/frame, 5 seeds added and 5 removed", dict(rim_speed=10.0, added_seeds=5, removed_seeds=5)),
+)
+
+
+def seeds_kept(spec: DishSpec) -> int:
+    """Seeds that one track follows over every frame they are seen."""
+    scene = make_dish_scene(spec)
+    frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+    config, drift = fit_motion(GOAConfig(), choose_motion(frames))
+    tracks = track_without_drift(frames, drift, lambda moved: goa_updown_open(moved, config, LifecycleConfig()))
+    return score_tracks(tracks, scene.truth, tolerance=0.5).correct_tracks
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--clips", type=int, default=4)
+    args = parser.parse_args()
+    print("| rim speed | " + " | ".join(f"hidden {gap} frames" for gap in GAPS) + " |")
+    print("| --- |" + " --- |" * len(GAPS))
+    for label, options in ROWS:
+        cells = []
+        for gap in GAPS:
+            kept = [
+                seeds_kept(DishSpec(seeds=SEEDS, frames=30, hidden_seeds=SEEDS // 4, hidden_frames=gap, random_seed=clip, **options))
+                for clip in range(args.clips)
+            ]
+            cells.append(f"{statistics.mean(kept):.0f}/{SEEDS}")
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
