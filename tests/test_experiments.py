@@ -97,6 +97,12 @@ def test_every_experiment_runs_at_a_tiny_size(name, tmp_path, capsys):
     assert ("seconds" in results) == (name == "volume")
 
 
+def test_tracker_comparisons_show_the_open_and_the_published_goa_updown():
+    for experiment in EXPERIMENTS.values():
+        if experiment.name != "models":
+            assert {"goa-updown", "goa-updown-fixed", "ipan"} <= set(experiment.trackers), experiment.name
+
+
 def test_same_options_give_the_same_files(tmp_path):
     outputs = []
     for folder in ("a", "b"):
