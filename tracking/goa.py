@@ -46,9 +46,15 @@ class GOAConfig:
         consider their ``neighbours`` nearest measurements.
     d_min : float
         Smallest speed, pixels/frame.
-    corner : {"zero", "phi"}
-        Weight of the false-track/slave block of the augmented matrix: 0 as in the reference
-        code (more links preferred), or phi_max as the paper's text can be read.
+    corner : {"phi", "zero"}
+        Weight of the false-track/slave block of the augmented matrix. "zero" is the reference
+        code's: a head left without a link and a measurement left without one then cost
+        2 phi_max together, so two links of phi_max each beat one perfect link. "phi" (default)
+        charges phi_max per unlinked head only, so the assignment prefers fewer, better links. A
+        fast dish whose seeds are missed now and then is where this matters (rim speed 42
+        px/frame, 5% of the seeds hidden in each frame: 198 of 240 seeds tracked right against
+        129 with "zero"; 30 px/frame, 10% hidden: 189 against 98); on PSMG and random walkers
+        the two agree or "phi" is slightly better.
     initialisation : {"lookahead", "im1"}
         How GOA-updown picks the first links. "im1" is the paper's: optimal nearest-neighbour
         assignment of frames 0 and 1. "lookahead" (default) scores each frame 0-1 link by the
@@ -77,7 +83,7 @@ class GOAConfig:
     phi_max: float = 0.1
     d_max: float | None = None
     d_min: float = 0.0
-    corner: str = "zero"
+    corner: str = "phi"
     initialisation: str = "lookahead"
     lookahead: int = 5
     neighbours: int = 24
