@@ -50,10 +50,14 @@ def psmg(**options) -> Callable[[int], Scene]:
     return make
 
 
-def dish(seed: int) -> Scene:
-    spec = DishSpec(seeds=80, frames=20, rim_speed=42.0, random_seed=seed)
-    truth = make_dish_scene(spec).truth
-    return [truth.xy[:, k] for k in range(spec.frames)], truth, 1.1 * spec.rim_speed
+def dish(**options) -> Callable[[int], Scene]:
+    def make(seed: int) -> Scene:
+        spec = DishSpec(seeds=80, frames=20, rim_speed=42.0, random_seed=seed, **options)
+        scene = make_dish_scene(spec)
+        frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+        return frames, scene.truth, 1.1 * spec.rim_speed
+
+    return make
 
 
 SCENES: dict[str, Callable[[int], Scene]] = {
@@ -64,7 +68,8 @@ SCENES: dict[str, Callable[[int], Scene]] = {
     "flow 3 px/frame + sigma 1": walkers(sigma=1.0, drift=(3.0, 0.0)),
     "PSMG 100 points, speed 5": psmg(trajectories=100, frames=20),
     "PSMG entry/exit, 10% missed": psmg(trajectories=100, frames=20, entry_exit=True, occlusion=0.1),
-    "dish 80 seeds, rim 42": dish,
+    "dish 80 seeds, rim 42": dish(),
+    "dish 80 seeds, rim 42, 5% missed": dish(hidden_probability=0.05),
 }
 
 
