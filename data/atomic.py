@@ -11,6 +11,28 @@ from typing import Iterator
 from .errors import DataError
 
 
+def check_target(path: str | os.PathLike) -> Path:
+    """Refuse now a file :func:`atomic_path` would refuse at the end of long work.
+
+    Returns
+    -------
+    Path
+        The folder the file goes in.
+
+    Raises
+    ------
+    DataError
+        If the target's folder does not exist, or the target is a folder.
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise DataError(target, f"folder {folder} does not exist")
+    if target.is_dir():
+        raise DataError(target, "is a folder; give a file name")
+    return folder
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path in the target's folder; rename it onto ``path`` on success.
@@ -23,11 +45,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         If the target's folder does not exist or cannot be written, or the target is a folder.
     """
     target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise DataError(target, f"folder {folder} does not exist")
-    if target.is_dir():
-        raise DataError(target, "is a folder; give a file name")
+    folder = check_target(target)
     try:
         handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=folder)
     except OSError as error:

@@ -69,18 +69,18 @@ class BlobOptions:
         if self.background not in BACKGROUNDS:
             raise ValueError(f"background must be one of {', '.join(BACKGROUNDS)}, got {self.background!r}")
         if not 3 <= self.background_size <= 2000:
-            raise ValueError(f"background size must lie in 3..2000 px, got {self.background_size}")
+            raise ValueError(f"background_size must lie in 3..2000 px, got {self.background_size:g}")
         if isinstance(self.threshold, str):
             if self.threshold not in THRESHOLD_METHODS:
                 raise ValueError(f"threshold must be otsu, adaptive or a number, got {self.threshold!r}")
         elif not 0 <= self.threshold <= 255:
-            raise ValueError(f"threshold must lie in 0..255, got {self.threshold}")
+            raise ValueError(f"threshold must lie in 0..255, got {self.threshold:g}")
         for name in ("min_area_px", "max_area_px"):
             value = getattr(self, name)
             if value is not None and value < 0:
-                raise ValueError(f"{name} must not be negative, got {value}")
+                raise ValueError(f"{name} must not be negative, got {value:g}")
         if self.min_area_px is not None and self.max_area_px is not None and self.min_area_px > self.max_area_px:
-            raise ValueError(f"min area {self.min_area_px} px exceeds max area {self.max_area_px} px")
+            raise ValueError(f"min_area_px {self.min_area_px:g} exceeds max_area_px {self.max_area_px:g}")
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:

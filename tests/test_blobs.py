@@ -51,7 +51,7 @@ def test_empty_frame_gives_no_detections():
 
 
 def test_min_area_above_max_area_is_refused():
-    with pytest.raises(ValueError, match="exceeds max area"):
+    with pytest.raises(ValueError, match="exceeds max_area_px"):
         BlobOptions(min_area_px=50, max_area_px=10)
 
 

@@ -81,11 +81,13 @@ def test_mask_image_limits_the_search(dish, tmp_path):
 @pytest.mark.parametrize(
     "options, message",
     [
-        (["--min-area", "50", "--max-area", "10"], "exceeds max area"),
+        (["--min-area", "50", "--max-area", "10"], "--min-area 50 exceeds --max-area 10"),
+        (["--min-area", "-5"], "--min-area must not be negative, got -5"),
+        (["--background-size", "1"], "--background-size must lie in 3..2000 px"),
         (["--roi", "{mask}"], "mask is 20x10, the frames 320x240"),
         (["--roi", "{junk}"], "not a mask image"),
         (["--threshold", "bright"], "--threshold must be otsu, adaptive or a number"),
-        (["--threshold", "300"], "threshold must lie in 0..255"),
+        (["--threshold", "300"], "--threshold must lie in 0..255"),
         (["--roi", "10,10,-3"], "radius > 0"),
         (["--detector", "log", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed"),

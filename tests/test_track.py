@@ -151,7 +151,7 @@ def test_track_bad_points_is_one_line_exit_2_nothing_written(tmp_path, capsys, t
         (["--max-speed", "nan"], "--max-speed must be a positive finite number, got nan"),
         (["--phi-max", "0"], "--phi-max must be a positive finite number, got 0"),
         (["--min-speed", "-1"], "--min-speed must be a non-negative finite number, got -1"),
-        (["--min-speed", "5", "--max-speed", "3"], "d_min must be non-negative and below d_max"),
+        (["--min-speed", "5", "--max-speed", "3"], "--min-speed (5) must be below --max-speed (3)"),
         (["--algorithm", "ss", "--max-speed", "-1"], "--max-speed must be a positive finite number, got -1"),
     ],
 )
@@ -165,6 +165,11 @@ def test_track_output_that_is_a_folder_is_one_line_exit_2(tmp_path, capsys):
     (tmp_path / "points.csv").write_text(GOOD_POINTS)
     _one_line_exit_2(capsys, ["track", tmp_path / "points.csv", "--out", tmp_path], "is a folder; give a file name")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]
+
+
+def test_track_output_in_a_missing_folder_is_refused_before_the_points_are_read(tmp_path, capsys):
+    out = tmp_path / "missing" / "tracks.csv"
+    _one_line_exit_2(capsys, ["track", tmp_path / "absent.csv", "--out", out], f"{out}: folder {out.parent} does not exist")
 
 
 TRUTH = "track_id,frame,x,y\n0,0,1,1\n0,1,2,1\n"

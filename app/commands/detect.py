@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data.atomic import atomic_path
+from data.atomic import atomic_path, check_target
 from data.csvio import write_table
 from data.errors import DataError
 from data.frames import IMAGE_SUFFIXES
@@ -116,7 +116,7 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             split=args.split,
         )
     except ValueError as error:
-        raise UsageError(str(error)) from None
+        raise UsageError(_in_option_names(str(error))) from None
     for name in ("start", "end", "step"):
         value = getattr(args, name)
         if value is not None and value < (1 if name == "step" else 0):
@@ -124,6 +124,22 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
     if args.end is not None and args.end <= args.start:
         raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
     return DetectionSettings(options, args.detector, _roi(args.roi), args.start, args.end, args.step)
+
+
+# BlobOptions names its fields in its errors; a user knows the options.
+_OPTION_OF_FIELD = {
+    "polarity": "--polarity",
+    "background_size": "--background-size",
+    "background": "--background",
+    "threshold": "--threshold",
+    "min_area_px": "--min-area",
+    "max_area_px": "--max-area",
+}
+
+
+def _in_option_names(message: str) -> str:
+    fields = re.compile(r"\b(" + "|".join(_OPTION_OF_FIELD) + r")\b")
+    return fields.sub(lambda match: _OPTION_OF_FIELD[match.group(1)], message)
 
 
 def _roi(text: str) -> str | Circle | Path:
@@ -194,8 +210,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--preview-frame needs --preview PNG")
     # Found out now rather than after a long clip has been read.
     for target in (args.out, args.preview):
-        if target is not None and not target.parent.is_dir():
-            raise DataError(target, f"folder {target.parent} does not exist")
+        if target is not None:
+            check_target(target)
     found = detect_clip(args.input, settings, preview_frame)
     rows = found.detections.to_rows()
     write_table(args.out, rows)

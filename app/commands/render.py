@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from data.atomic import check_target
 from data.csvio import read_table
 from data.errors import DataError
 from data.frames import FrameSource, open_frames
@@ -64,6 +65,8 @@ def check_view_options(args: argparse.Namespace) -> str | None:
     ------
     UsageError
         If an option is out of range or no output is asked for.
+    DataError
+        If an output file's folder does not exist.
     """
     if args.out is None and getattr(args, "summary", None) is None:
         raise UsageError("give --out" + (" or --summary" if hasattr(args, "summary") else ""))
@@ -74,6 +77,10 @@ def check_view_options(args: argparse.Namespace) -> str | None:
     kind = output_kind(args.out) if args.out is not None else None
     if args.frame is not None and kind != "png":
         raise UsageError("--frame chooses the frame of a .png output; use --start/--end/--step for clips")
+    # A missing folder is found now rather than after the whole clip has been drawn.
+    for target in (args.out if kind not in (None, "folder") else None, getattr(args, "summary", None)):
+        if target is not None:
+            check_target(target)
     return kind
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from data.atomic import check_target
 from data.csvio import TRACK_COLUMNS, read_table, write_table
 from data.errors import DataError
 from tracking.goa import GOAConfig, goa, initial_links
@@ -197,6 +198,8 @@ def _check_options(args: argparse.Namespace) -> None:
         if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
             kind = "a non-negative" if allow_zero else "a positive"
             raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
+    if args.min_speed is not None and args.max_speed is not None and args.min_speed >= args.max_speed:
+        raise UsageError(f"--min-speed ({args.min_speed:g}) must be below --max-speed ({args.max_speed:g})")
     if args.algorithm not in _GOA_FAMILY:
         given = [f"--{name.replace('_', '-')}" for name in _GOA_ONLY if getattr(args, name) is not None]
         if given:
@@ -247,6 +250,7 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
 
 def run(args: argparse.Namespace) -> int:
     _check_options(args)
+    check_target(args.out)  # now rather than after a long tracking run
     points = read_points(args.points)
     tracks = track_points(points, args)
     rows = track_rows(points, tracks)
