@@ -273,13 +273,20 @@ def run_pipeline(
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished.
     """
+    created = not out.is_dir()
     prepare_output_folder(out)
-    found = detect_clip(clip, settings)
-    detections = found.detections
-    write_table(out / "detections.csv", detections.to_rows())
-    config, drift = motion_config(detections.points, config, motion)
-    tracks = track_without_drift(detections.points, drift, lambda frames: link_frames(frames, config, lifecycle))
-    tracks = drop_short(tracks, min_length)
-    write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-    render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
+    try:
+        found = detect_clip(clip, settings)
+        detections = found.detections
+        write_table(out / "detections.csv", detections.to_rows())
+        config, drift = motion_config(detections.points, config, motion)
+        tracks = track_without_drift(detections.points, drift, lambda frames: link_frames(frames, config, lifecycle))
+        tracks = drop_short(tracks, min_length)
+        write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
+        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
+    except BaseException:
+        # An interruption or a bad input before the first file leaves no empty folder behind.
+        if created and not any(out.iterdir()):
+            out.rmdir()
+        raise
     return detections, tracks

@@ -74,7 +74,25 @@ def test_bad_input_is_one_line_exit_2_and_no_outputs(tmp_path, make_input, messa
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert message in result.stderr
-    assert not any(out.glob("*")) if out.exists() else True
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("link_frames", ["detections.csv"])])
+def test_ctrl_c_keeps_finished_files_and_leaves_no_empty_folder(small_clip, tmp_path, capsys, monkeypatch, stage, kept):
+    import app.pipeline
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(app.pipeline, stage, interrupted)
+    out = tmp_path / "out"
+    assert main(["run", str(small_clip / "clip.mp4"), "--out", str(out)]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    if kept is None:
+        assert not out.exists()
+    else:
+        assert sorted(path.name for path in out.iterdir()) == kept
+        assert sorted(set(read_table(out / "detections.csv")["frame"])) == list(range(6))
 
 
 def test_unwritable_output_folder(small_clip, tmp_path):
@@ -87,7 +105,7 @@ def test_unwritable_output_folder(small_clip, tmp_path):
 def test_nonsense_option_is_exit_2(small_clip, tmp_path):
     result = seedtrack("run", small_clip / "clip.mp4", "--out", tmp_path, "--phi-max", "-1")
     assert result.returncode == 2
-    assert "phi_max" in result.stderr and "Traceback" not in result.stderr
+    assert "--phi-max must be a positive finite number, got -1" in result.stderr and "Traceback" not in result.stderr
 
 
 def _write(path, content):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from tracking.goa import GOAConfig
@@ -63,6 +64,22 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def check_limits(args: argparse.Namespace, options: tuple[str, ...] = ("max_speed", "phi_max")) -> None:
+    """Refuse a speed or angle limit that is not a positive finite number (``min_speed`` may be 0).
+
+    Raises
+    ------
+    UsageError
+        Naming the option as typed.
+    """
+    for option in options:
+        value = getattr(args, option)
+        allow_zero = option == "min_speed"
+        if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
+            kind = "a non-negative" if allow_zero else "a positive"
+            raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
+
+
 def tracker_config(args: argparse.Namespace) -> GOAConfig:
     """The tracker configuration the options ask for.
 
@@ -71,6 +88,7 @@ def tracker_config(args: argparse.Namespace) -> GOAConfig:
     UsageError
         If the options make no sense.
     """
+    check_limits(args)
     try:
         return GOAConfig(phi_max=args.phi_max, d_max=args.max_speed)
     except ValueError as error:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,7 +21,7 @@ from tracking.tracks import Tracks
 from ..errors import UsageError
 from ..pipeline import link_frames, motion_config
 from ..progress import progress_bar
-from .run import add_tracker_options, lifecycle_config
+from .run import add_tracker_options, check_limits, lifecycle_config
 
 POINT_COLUMNS = ("frame", "x", "y")
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
@@ -193,11 +192,7 @@ def goa_config(args: argparse.Namespace) -> GOAConfig:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    for option, allow_zero in (("max_speed", False), ("min_speed", True), ("phi_max", False)):
-        value = getattr(args, option)
-        if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
-            kind = "a non-negative" if allow_zero else "a positive"
-            raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
+    check_limits(args, ("max_speed", "min_speed", "phi_max"))
     if args.min_speed is not None and args.max_speed is not None and args.min_speed >= args.max_speed:
         raise UsageError(f"--min-speed ({args.min_speed:g}) must be below --max-speed ({args.max_speed:g})")
     if args.algorithm not in _GOA_FAMILY:
