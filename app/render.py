@@ -9,6 +9,8 @@ picture reads at 640x480 and at 4K.
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 from typing import Iterable, Iterator, Sequence
 
@@ -386,14 +388,49 @@ def _draw_labels(canvas, texts: list[str], xy: np.ndarray, colours: list, style:
     """Each text up and to the right of its position."""
     gap = style.radius + 2
     origins = np.round(xy + [gap, -gap]).astype(int).tolist()
-    for text, origin, colour in zip(texts, map(tuple, origins), colours):
-        draw_text(canvas, text, origin, colour, style.font, style.text)
+    draw_texts(canvas, texts, list(map(tuple, origins)), colours, style.font, style.text)
 
 
 def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int) -> None:
     """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo."""
-    cv2.putText(canvas, text, origin, _FONT, font, _HALO, 3 * thickness // 2 + 2, cv2.LINE_AA)
-    cv2.putText(canvas, text, origin, _FONT, font, colour, thickness, cv2.LINE_AA)
+    draw_texts(canvas, [text], [origin], [colour], font, thickness)
+
+
+def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int) -> None:
+    """Write each text on ``canvas`` (BGR uint8) with its baseline starting at its origin
+    (pixels), on a black halo."""
+    height, width = canvas.shape[:2]
+    for text, (x, y) in zip(texts, origins):
+        halo, left, top = _halo(text, font, thickness)
+        x0, y0 = x - left, y - top
+        x1, y1 = x0 + halo.shape[1], y0 + halo.shape[0]
+        cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
+        if cx0 >= cx1 or cy0 >= cy1:
+            continue
+        box = canvas[cy0:cy1, cx0:cx1]
+        cut = halo[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0]
+        # The darker of the two, so that the halos of labels that overlap do not darken each other.
+        cv2.min(box, cut, dst=box)
+    for text, origin, colour in zip(texts, origins, colours):
+        cv2.putText(canvas, text, origin, _FONT, font, colour, thickness, cv2.LINE_AA)
+
+
+@functools.lru_cache(maxsize=4096)
+def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
+    """The most each pixel around ``text`` may keep of its brightness (255 - halo, three equal
+    channels), and the text origin's position in that picture (left, top). Ids recur every
+    frame, hence the cache."""
+    # The text's own pixels grown by a few pixels. A thicker stroke will not do: OpenCV's fonts
+    # space and weigh glyphs by thickness, so a thick copy does not surround thin text.
+    reach = thickness // 2 + 1
+    pad = reach + thickness + 2
+    (text_width, text_height), baseline = cv2.getTextSize(text, _FONT, font, thickness)
+    written = np.zeros((text_height + baseline + 2 * pad, text_width + 2 * pad), np.uint8)
+    cv2.putText(written, text, (pad, pad + text_height), _FONT, font, 255, thickness, cv2.LINE_AA)
+    grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * reach + 1, 2 * reach + 1))
+    halo = cv2.cvtColor(255 - cv2.dilate(written, grow), cv2.COLOR_GRAY2BGR)
+    halo.flags.writeable = False
+    return halo, pad, pad + text_height
 
 
 class FalseDetections:

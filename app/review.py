@@ -7,12 +7,11 @@ import numpy as np
 
 from tracking.tracks import Tracks
 
-from .render import SHIFT, to_fixed, track_colour
+from .render import SHIFT, draw_text, to_fixed, track_colour
 
 # Pages are enlarged until they are at least this wide, so ids of small clips stay readable.
 _MIN_PAGE_WIDTH = 1280
 _MAX_ZOOM = 4
-_FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
 def review_zoom(width: int) -> int:
@@ -60,9 +59,7 @@ def draw_review_page(frame: np.ndarray, tracks: Tracks, column: int, frame_index
         cv2.circle(page, tuple(to_fixed(np.array([x, y]))), 4 << SHIFT, colour, 2 if hollow else -1, cv2.LINE_AA, SHIFT)
         origin = (int(round(x + 7)), int(round(y - 7)))
         text = str(tracks.track_ids[row])
-        cv2.putText(page, text, origin, _FONT, 0.7, (0, 0, 0), 5, cv2.LINE_AA)
-        cv2.putText(page, text, origin, _FONT, 0.7, colour, 2, cv2.LINE_AA)
+        draw_text(page, text, origin, colour, 0.7, 2)
     label = f"frame {frame_index}"
-    cv2.putText(page, label, (12, 36), _FONT, 1.0, (0, 0, 0), 6, cv2.LINE_AA)
-    cv2.putText(page, label, (12, 36), _FONT, 1.0, (255, 255, 255), 2, cv2.LINE_AA)
+    draw_text(page, label, (12, 36), (255, 255, 255), 1.0, 2)
     return page

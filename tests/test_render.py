@@ -10,7 +10,7 @@ from PIL import Image
 
 from app.cli import main
 from app.commands.compare import disagreeing_links
-from app.render import PALETTE_BGR, WARNING_BGR, FalseDetections, TrackLayer, View, annotate, track_colour
+from app.render import PALETTE_BGR, WARNING_BGR, FalseDetections, TrackLayer, View, annotate, draw_text, track_colour
 from data.csvio import write_table
 from data.dish import DishSpec, write_dish_clip
 from data.frames import open_frames
@@ -297,3 +297,14 @@ def test_compare_with_tracks_past_the_video_is_one_line_exit_2(clip, tmp_path, c
     err = capsys.readouterr().err
     assert status == 2 and err.count("\n") == 1 and "late.csv" in err and "lie outside the video" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("thickness", [1, 2, 3])
+def test_text_halo_hugs_the_text(thickness):
+    # OpenCV spaces thin glyphs narrower than thick ones; a halo drawn thicker than thin text ran ahead of it.
+    canvas = np.full((60, 400, 3), 128, np.uint8)
+    draw_text(canvas, "frame 0: 416 found", (10, 40), (255, 255, 255), 0.7, thickness)
+    text_columns = np.nonzero((canvas == 255).all(axis=2).any(axis=0))[0]
+    halo_columns = np.nonzero((canvas < 64).all(axis=2).any(axis=0))[0]
+    assert abs(halo_columns.max() - text_columns.max()) <= thickness + 2
+    assert abs(halo_columns.min() - text_columns.min()) <= thickness + 2
