@@ -30,6 +30,7 @@ from tracking.tracks import Tracks
 from .errors import UsageError
 from .render import FalseDetections, TrackLayer, View, annotate_frames, track_legend
 from .progress import progress_bar
+from .wording import counted
 
 DETECTORS = {"blob": detect_blobs, "log": detect_spots}
 # Frames whose per-pixel median is a static scene's background: spread over the clip.
@@ -167,7 +168,7 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
         if not indices:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if source.stopped_early:
-            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {len(indices)} frames before it", file=sys.stderr)
+            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(indices), 'frame')} before it", file=sys.stderr)
         return ClipDetections(Detections(np.array(indices), columns), source.fps, roi, circle, preview)
 
 

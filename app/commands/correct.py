@@ -8,6 +8,8 @@ from pathlib import Path
 from data.corrections import apply_corrections, read_corrections
 from data.trackfile import FORMATS, read_tracks, write_tracks
 
+from ..wording import counted
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -30,5 +32,5 @@ def run(args: argparse.Namespace) -> int:
     edits = read_corrections(args.edits)
     corrected = apply_corrections(tracks, edits, args.edits)
     write_tracks(args.out, corrected, format=args.out_format)
-    print(f"applied {len(edits)} edits: {tracks.n_tracks} tracks in, {corrected.n_tracks} out; wrote {args.out}")
+    print(f"applied {counted(len(edits), 'edit')}: {counted(tracks.n_tracks, 'track')} in, {corrected.n_tracks} out; wrote {args.out}")
     return 0

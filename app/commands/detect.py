@@ -23,6 +23,7 @@ from ..errors import UsageError
 from ..render import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
+from ..wording import counted
 
 _CIRCLE = re.compile(r"^\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*$")
 _FOUND_BGR = (0, 0, 255)
@@ -217,7 +218,7 @@ def run(args: argparse.Namespace) -> int:
     write_table(args.out, rows)
     frames = len(found.detections.frame_indices)
     message = (
-        f"{frames} frames ({found.fps:.4g} frames/s), {len(rows['frame'])} detections "
+        f"{counted(frames, 'frame')} ({found.fps:.4g} frames/s), {counted(len(rows['frame']), 'detection')} "
         f"({len(rows['frame']) / frames:.1f} per frame); wrote {args.out}"
     )
     if args.preview is not None:

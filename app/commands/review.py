@@ -13,6 +13,7 @@ from ..errors import UsageError
 from ..pipeline import prepare_output_folder
 from ..progress import progress_bar
 from ..review import draw_review_page
+from ..wording import counted
 
 DEFAULT_EVERY = 5
 
@@ -48,5 +49,5 @@ def run(args: argparse.Namespace) -> int:
                     write_png(args.out / f"review_{index:06d}.png", page)
                     written += 1
                 bar.update()
-    print(f"wrote {written} review pages of {tracks.n_tracks} tracks to {args.out}")
+    print(f"wrote {counted(written, 'review page')} of {counted(tracks.n_tracks, 'track')} to {args.out}")
     return 0

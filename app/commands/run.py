@@ -12,6 +12,7 @@ from tracking.regime import MOTIONS
 
 from ..errors import UsageError
 from ..pipeline import run_pipeline
+from ..wording import counted
 from .detect import add_detection_options, detection_settings
 
 
@@ -135,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     detections, tracks = run_pipeline(args.input, args.out, settings, config, lifecycle, args.min_length, args.motion)
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
-        f"{len(detections.columns)} frames, {measured} detections, {tracks.n_tracks} tracks; "
+        f"{counted(len(detections.columns), 'frame')}, {counted(measured, 'detection')}, {counted(tracks.n_tracks, 'track')}; "
         f"wrote {args.out / 'detections.csv'}, {args.out / 'tracks.csv'}, {args.out / 'overlay.mp4'}"
     )
     return 0

@@ -21,6 +21,7 @@ from tracking.tracks import Tracks
 from ..errors import UsageError
 from ..pipeline import link_frames, motion_config
 from ..progress import progress_bar
+from ..wording import counted
 from .run import add_tracker_options, check_limits, lifecycle_config
 
 POINT_COLUMNS = ("frame", "x", "y")
@@ -251,7 +252,7 @@ def run(args: argparse.Namespace) -> int:
     rows = track_rows(points, tracks)
     write_table(args.out, rows)
     print(
-        f"{len(points.frames)} frames, {sum(f.shape[0] for f in points.frames)} points, {tracks.n_tracks} tracks, "
+        f"{len(points.frames)} frames, {sum(f.shape[0] for f in points.frames)} points, {counted(tracks.n_tracks, 'track')}, "
         f"{int(rows['interpolated'].sum())} interpolated positions; wrote {args.out}"
     )
     return 0
