@@ -10,6 +10,7 @@ Installed with the ``peers`` extra (trackpy, laptrack, pandas).
 from __future__ import annotations
 
 import importlib.util
+import warnings
 from typing import Callable, Sequence
 
 import numpy as np
@@ -52,20 +53,26 @@ def _trackpy(mode: str) -> Callable[[Sequence[np.ndarray], float, int], Tracks]:
 
         trackpy.quiet()
         table = _table(frames)
-        try:
-            if mode == "predict":
-                linked = trackpy.predict.NearestVelocityPredict().link_df(table, max_speed)
-            elif mode == "adaptive":
-                linked = trackpy.link(
-                    table, max_speed, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP
-                )
-            else:
-                linked = trackpy.link(table, max_speed)
-        except Exception as error:  # trackpy signals giving up with several exception types
-            raise PeerFailure(f"{type(error).__name__}: {error}") from None
-        return _tracks(linked, "particle", first_frame)
+        # trackpy's own use of pandas APIs due to change is for its maintainers, not our users.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", FutureWarning)
+            return _tracks(_trackpy_link(table, mode, max_speed), "particle", first_frame)
 
     return run
+
+
+def _trackpy_link(table, mode: str, max_speed: float):
+    import trackpy
+
+    try:
+        if mode == "predict":
+            return trackpy.predict.NearestVelocityPredict().link_df(table, max_speed)
+        if mode == "adaptive":
+            return trackpy.link(table, max_speed, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP)
+        return trackpy.link(table, max_speed)
+    except Exception as error:  # trackpy signals giving up with several exception types
+        raise PeerFailure(f"{type(error).__name__}: {error}") from None
 
 
 def _laptrack(frames: Sequence[np.ndarray], max_speed: float, first_frame: int = 0) -> Tracks:
