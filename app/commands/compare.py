@@ -14,6 +14,7 @@ from tracking.tracks import Tracks
 from ..errors import UsageError
 from ..frame_output import write_frames
 from ..render import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
+from ..wording import counted
 from .render import add_view_options, check_view_options, open_range
 
 DEFAULT_TOLERANCE = 3.0
@@ -31,7 +32,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
     parser.add_argument("a", type=Path, metavar="A", help="first track set (csv, trackpy csv, MOT txt, TrackMate or ISBI xml), drawn blue")
     parser.add_argument("b", type=Path, metavar="B", help="second track set, drawn vermillion")
-    add_view_options(parser)
+    add_view_options(parser, out_required=True)
     parser.add_argument("--tol", type=float, default=DEFAULT_TOLERANCE, metavar="PX", help=f"matching distance in pixels (default {DEFAULT_TOLERANCE:g})")
     layout = parser.add_mutually_exclusive_group()
     layout.add_argument("--side-by-side", dest="overlay", action="store_false", help="A on the left, B on the right (default)")
@@ -65,6 +66,11 @@ def disagreeing_links(tracks: Tracks, other: Tracks, tolerance: float) -> np.nda
     return warnings
 
 
+def _short_name(path: Path, other: Path) -> str:
+    """The file name, with its folder when the other file has the same name (run1/tracks.csv)."""
+    return f"{path.parent.name}/{path.name}" if path.name == other.name and path.parent.name else path.name
+
+
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
     if not args.tol > 0:
@@ -77,8 +83,8 @@ def run(args: argparse.Namespace) -> int:
         view = View.of(source.size, args.crop, args.scale)
         layer_a = TrackLayer(a, view, trail=args.trail, labels=args.labels, colour=COMPARE_A_BGR, warnings=warnings_a)
         layer_b = TrackLayer(b, view, trail=args.trail, labels=args.labels, colour=COMPARE_B_BGR, warnings=warnings_b)
-        legend_a = ("line", COMPARE_A_BGR, f"A: {args.a.name}")
-        legend_b = ("line", COMPARE_B_BGR, f"B: {args.b.name}")
+        legend_a = ("line", COMPARE_A_BGR, f"A: {_short_name(args.a, args.b)}")
+        legend_b = ("line", COMPARE_B_BGR, f"B: {_short_name(args.b, args.a)}")
         warning = ("line", WARNING_BGR, "link the other lacks")
         if args.overlay:
             frames = ((index, annotate(image, index, view, [layer_a, layer_b], legend=[legend_a, legend_b, warning])) for index, image in source)
@@ -86,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
             frames = _side_by_side(source, view, (layer_a, [legend_a, warning]), (layer_b, [legend_b, warning]))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
     print(
-        f"wrote {args.out}: {count} frames; links disagreeing within {args.tol:g} px: "
+        f"wrote {args.out}: {counted(count, 'frame')}; links disagreeing within {args.tol:g} px: "
         f"A {int(warnings_a.sum())} of {_links(a)}, B {int(warnings_b.sum())} of {_links(b)}"
     )
     return 0

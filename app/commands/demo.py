@@ -28,9 +28,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--rim-speed", type=float, default=defaults.rim_speed, metavar="PX", help=f"speed at the dish rim, pixels/frame (default {defaults.rim_speed:g})"
     )
-    parser.add_argument("--random-seed", type=int, default=defaults.random_seed, help="seed of the generator")
+    parser.add_argument("--random-seed", type=int, default=defaults.random_seed, metavar="N", help=f"seed of the generator (default {defaults.random_seed})")
     parser.add_argument(
-        "--hidden-probability", type=float, default=defaults.hidden_probability, metavar="P", help="probability that a seed is hidden in a frame"
+        "--hidden-probability", type=float, default=defaults.hidden_probability, metavar="P", help=f"probability that a seed is hidden in a frame (default {defaults.hidden_probability:g})"
     )
     parser.add_argument("--tol", type=float, default=1.0, metavar="PX", help="matching distance to the truth, pixels (default 1)")
     add_tracker_options(parser)

@@ -16,14 +16,16 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..frame_output import output_kind, write_frames
 from ..render import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
+from ..wording import counted
 
 DEFAULT_TRAIL = 10
 
 
-def add_view_options(parser: argparse.ArgumentParser) -> None:
+def add_view_options(parser: argparse.ArgumentParser, out_required: bool) -> None:
     """The input, output, frame range and drawing options shared by ``render`` and ``compare``."""
     parser.add_argument(
         "--out",
+        required=out_required,
         default=None,
         metavar="OUT",
         help="output: .mp4 (H.264 clip), .gif (animated), .png (one frame, see --frame) or a folder (no extension "
@@ -51,7 +53,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
-    add_view_options(parser)
+    add_view_options(parser, out_required=False)
     parser.add_argument("--summary", type=Path, default=None, metavar="PNG", help="also draw every whole trajectory over the first frame into this PNG")
     parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): mark those that no track holds")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
@@ -124,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
         if args.summary is not None:
             _, first = next(iter(open_frames(args.input, start=args.start, end=args.start + 1)))
-            write_png(args.summary, summary_picture(first, view, [layer], f"{tracks.n_tracks} tracks"))
+            write_png(args.summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
         if kind is None:
             print(f"wrote {args.summary}")
             return 0
@@ -133,6 +135,6 @@ def run(args: argparse.Namespace) -> int:
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
         frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(false is not None))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
-    print(f"wrote {args.out}: {count} frames of {tracks.n_tracks} tracks, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else ""))
+    print(f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else ""))
     return 0
 
