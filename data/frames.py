@@ -9,6 +9,7 @@ across frames (later frames are clipped to that range).
 
 from __future__ import annotations
 
+import abc
 import glob
 import os
 import re
@@ -167,7 +168,7 @@ def _natural_key(path: Path) -> tuple:
     return tuple(int(part) if i % 2 else part for i, part in enumerate(parts))
 
 
-class _Reader:
+class _Reader(abc.ABC):
     """A source backend: ``length`` (frames, or None), ``exact``, ``fps``, ``size`` and ``read``."""
 
     length: int | None
@@ -175,10 +176,10 @@ class _Reader:
     fps: float
     size: tuple[int, int]
 
+    @abc.abstractmethod
     def read(self, start: int, stop: int | None, step: int) -> Iterator[tuple[int, np.ndarray | None, str | None]]:
         """Yield ``(index, image, None)`` for index in range(start, stop, step), up to a last
         ``(index, None, problem)`` if the source breaks off at ``index``."""
-        raise NotImplementedError
 
     def close(self) -> None:
         """Release open files."""
