@@ -15,12 +15,11 @@ import cv2
 import numpy as np
 from PIL import Image
 
-from data.atomic import atomic_path
+from data.atomic import atomic_path, output_folder
 from data.errors import DataError
 from data.video import write_video
 
 from .error_plot import write_png
-from .pipeline import prepare_output_folder
 from .progress import progress_bar
 
 KINDS = {".mp4": "mp4", ".gif": "gif", ".png": "png"}
@@ -85,12 +84,12 @@ def write_frames(out: str, frames: Iterable[tuple[int, np.ndarray]], fps: float,
             bar.update(1)
             return 1
         folder = Path(out)
-        prepare_output_folder(folder)
         count = 0
-        for index, image in frames:
-            write_png(folder / f"frame_{index:06d}.png", image)
-            count += 1
-            bar.update(1)
+        with output_folder(folder):
+            for index, image in frames:
+                write_png(folder / f"frame_{index:06d}.png", image)
+                count += 1
+                bar.update(1)
         return count
 
 

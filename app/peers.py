@@ -47,7 +47,9 @@ def _tracks(table, id_column: str, first_frame: int) -> Tracks:
     )
 
 
-def _trackpy(mode: str) -> Callable[[Sequence[np.ndarray], float, int], Tracks]:
+def trackpy_linker(mode: str, memory: int = 0) -> Callable[[Sequence[np.ndarray], float, int], Tracks]:
+    """trackpy's ``link`` as a tracker: ``mode`` "plain", "adaptive" (adaptive search) or
+    "predict" (``NearestVelocityPredict``); a particle may vanish for ``memory`` frames."""
     def run(frames: Sequence[np.ndarray], max_speed: float, first_frame: int = 0) -> Tracks:
         import trackpy
 
@@ -57,20 +59,22 @@ def _trackpy(mode: str) -> Callable[[Sequence[np.ndarray], float, int], Tracks]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)
             warnings.simplefilter("ignore", FutureWarning)
-            return _tracks(_trackpy_link(table, mode, max_speed), "particle", first_frame)
+            return _tracks(_trackpy_link(table, mode, max_speed, memory), "particle", first_frame)
 
     return run
 
 
-def _trackpy_link(table, mode: str, max_speed: float):
+def _trackpy_link(table, mode: str, max_speed: float, memory: int):
     import trackpy
 
     try:
         if mode == "predict":
-            return trackpy.predict.NearestVelocityPredict().link_df(table, max_speed)
+            return trackpy.predict.NearestVelocityPredict().link_df(table, max_speed, memory=memory)
         if mode == "adaptive":
-            return trackpy.link(table, max_speed, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP)
-        return trackpy.link(table, max_speed)
+            return trackpy.link(
+                table, max_speed, memory=memory, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP
+            )
+        return trackpy.link(table, max_speed, memory=memory)
     except Exception as error:  # trackpy signals giving up with several exception types
         raise PeerFailure(f"{type(error).__name__}: {error}") from None
 
@@ -95,8 +99,8 @@ def _laptrack(frames: Sequence[np.ndarray], max_speed: float, first_frame: int =
 
 
 PEERS: dict[str, Callable[[Sequence[np.ndarray], float, int], Tracks]] = {
-    "trackpy": _trackpy("plain"),
-    "trackpy-adaptive": _trackpy("adaptive"),
-    "trackpy-predict": _trackpy("predict"),
+    "trackpy": trackpy_linker("plain"),
+    "trackpy-adaptive": trackpy_linker("adaptive"),
+    "trackpy-predict": trackpy_linker("predict"),
     "laptrack": _laptrack,
 }

@@ -10,9 +10,11 @@ import math
 import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
+from data.atomic import output_folder
 from data.csvio import write_table
 from data.errors import DataError
 from data.frames import FrameSource, open_frames, read_mask
@@ -196,20 +198,29 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
             return temporal_median(grey_frames(), _BACKGROUND_FRAMES)
 
 
-def motion_config(
-    frames: list[np.ndarray], config: GOAConfig, motion: str, keep_model: bool = False
-) -> tuple[GOAConfig, tuple[float, float]]:
-    """``config`` fitted to the motion of the points (:func:`tracking.regime.choose_motion`;
-    ``motion`` is "auto", "smooth" or "random"), and the drift to track without
-    (:func:`tracking.regime.track_without_drift`), pixels/frame; says on standard output what was
-    chosen and why. ``keep_model`` keeps ``config``'s individual model (the user chose it)."""
+def track_with_motion(
+    frames: list[np.ndarray],
+    config: GOAConfig,
+    motion: str,
+    track: Callable[[list[np.ndarray], GOAConfig], Tracks],
+    keep_model: bool = False,
+    say: Callable[[str], None] = print,
+) -> Tracks:
+    """``track(frames, fitted)`` with ``config`` fitted to the motion of the points.
+
+    The motion is measured by :func:`tracking.regime.choose_motion` (``motion`` is "auto",
+    "smooth" or "random") and the choice said on one ``motion: ...`` line. Random motion with a
+    common drift is tracked in a frame moving with the drift and returned in the image frame
+    (:func:`tracking.regime.track_without_drift`). ``keep_model`` keeps ``config``'s individual
+    model (the user chose it).
+    """
     choice = choose_motion(frames, motion)
     fitted, drift = fit_motion(config, choice, keep_model)
     limit = "no speed limit" if fitted.d_max is None else f"speed limit {fitted.d_max:.2f} px/frame"
     if any(drift):
         limit += f" about the drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame"
-    print(f"motion: {choice.reason}; tracking with {fitted.individual.name.upper()}, {limit}")
-    return fitted, drift
+    say(f"motion: {choice.reason}; tracking with {fitted.individual.name.upper()}, {limit}")
+    return track_without_drift(frames, drift, lambda moved: track(moved, fitted))
 
 
 def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
@@ -240,22 +251,6 @@ def render_overlay(
             write_video(out, (image for _, image in frames), fps, progress=bar)
 
 
-def prepare_output_folder(folder: Path) -> None:
-    """Create the output folder if needed.
-
-    Raises
-    ------
-    DataError
-        If it cannot be created or is not a writable folder.
-    """
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise DataError(folder, f"cannot create output folder ({error.strerror})") from None
-    if not folder.is_dir():
-        raise DataError(folder, "exists and is not a folder")
-
-
 def run_pipeline(
     clip: Path,
     out: Path,
@@ -268,26 +263,17 @@ def run_pipeline(
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
     Tracking is :func:`link_frames` with ``lifecycle`` and ``config`` fitted to ``motion`` (see
-    :func:`motion_config`); tracks spanning fewer than ``min_length``
-    frames are not written.
+    :func:`track_with_motion`); tracks spanning fewer than ``min_length`` frames are not written.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
-    finished.
+    finished; an output folder made here and still empty is removed again.
     """
-    created = not out.is_dir()
-    prepare_output_folder(out)
-    try:
+    with output_folder(out):
         found = detect_clip(clip, settings)
         detections = found.detections
         write_table(out / "detections.csv", detections.to_rows())
-        config, drift = motion_config(detections.points, config, motion)
-        tracks = track_without_drift(detections.points, drift, lambda frames: link_frames(frames, config, lifecycle))
+        tracks = track_with_motion(detections.points, config, motion, lambda frames, fitted: link_frames(frames, fitted, lifecycle))
         tracks = drop_short(tracks, min_length)
         write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
         render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
-    except BaseException:
-        # An interruption or a bad input before the first file leaves no empty folder behind.
-        if created and not any(out.iterdir()):
-            out.rmdir()
-        raise
     return detections, tracks

@@ -1,4 +1,5 @@
-"""Write files so that a reader never sees half of one: write beside the target, then rename."""
+"""Write files so that a reader never sees half of one: write beside the target, then rename;
+and leave no empty folder behind when work fails before its first file."""
 
 from __future__ import annotations
 
@@ -61,4 +62,34 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         os.replace(temporary_path, target)
     except BaseException:
         temporary_path.unlink(missing_ok=True)
+        raise
+
+
+@contextlib.contextmanager
+def output_folder(folder: str | os.PathLike) -> Iterator[Path]:
+    """Create ``folder`` and its missing parents for the work in the ``with`` block.
+
+    If the block fails or is interrupted, the folders created here that are still empty are
+    removed again, so that a bad input or Ctrl-C before the first file leaves nothing behind.
+
+    Raises
+    ------
+    DataError
+        If the folder cannot be created or a file of that name exists.
+    """
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise DataError(folder, "exists and is not a folder")
+    missing = [path for path in (folder, *folder.parents) if not path.exists()]
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise DataError(folder, f"cannot create output folder ({error.strerror})") from None
+    try:
+        yield folder
+    except BaseException:
+        for created in missing:  # deepest first
+            if any(created.iterdir()):
+                break
+            created.rmdir()
         raise

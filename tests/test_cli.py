@@ -69,12 +69,12 @@ def test_max_speed_option_reaches_the_tracker(small_clip, tmp_path):
 )
 def test_bad_input_is_one_line_exit_2_and_no_outputs(tmp_path, make_input, message):
     clip = make_input(tmp_path)
-    out = tmp_path / "out"
+    out = tmp_path / "out" / "sub"
     result = seedtrack("run", clip, "--out", out)
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert message in result.stderr
-    assert not out.exists()
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("link_frames", ["detections.csv"])])

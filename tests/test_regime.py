@@ -1,5 +1,7 @@
 """Choosing the motion model from the measurements: smooth, noisy or random motion."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -122,6 +124,18 @@ def test_track_with_default_options_follows_random_walkers(tmp_path, capsys):
     assert capsys.readouterr().out.startswith("motion: random motion")
     # The smooth-motion model links random walkers to their neighbours; measuring the motion first does not.
     assert scores["auto"].link_error < 0.02 < 0.3 < scores["smooth"].link_error
+
+
+def test_track_follows_drifting_walkers_in_the_frame_of_their_drift(tmp_path, capsys):
+    # Steps of 3 px/frame to the right plus 1 px of noise: about the drift the walkers are easy to
+    # tell apart; tracked where they stand, each one's 5 sigma disc holds its neighbours' points.
+    points, truth = walkers(count=200, sigma=1.0, drift=(3.0, 0.0), frames=15)
+    _write_points(tmp_path / "points.csv", points)
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv")]) == 0
+    drift = re.search(r"tracking with IM1, .* about the drift \((\S+), (\S+)\) px/frame", capsys.readouterr().out)
+    assert drift and float(drift[1]) == pytest.approx(3.0, abs=0.2) and float(drift[2]) == pytest.approx(0.0, abs=0.2)
+    scores = score_tracks(read_tracks(tmp_path / "t.csv"), truth)
+    assert scores.link_error < 0.01
 
 
 def test_motion_is_refused_by_trackers_that_do_not_read_it(tmp_path, capsys):

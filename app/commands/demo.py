@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from data.atomic import output_folder
 from data.dish import DishSpec, write_dish_clip
 from data.trackfile import read_tracks
 from tracking.metrics import score_tracks
 
 from ..errors import UsageError
-from ..pipeline import DetectionSettings, prepare_output_folder, run_pipeline
+from ..pipeline import DetectionSettings, run_pipeline
 from .run import add_tracker_options, lifecycle_config, tracker_config
 
 
@@ -49,9 +50,9 @@ def run(args: argparse.Namespace) -> int:
         )
     except ValueError as error:
         raise UsageError(str(error)) from None
-    prepare_output_folder(args.out)
-    scene = write_dish_clip(spec, args.out)
-    run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length, args.motion)
+    with output_folder(args.out):
+        scene = write_dish_clip(spec, args.out)
+        run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length, args.motion)
     result = read_tracks(args.out / "tracks.csv")
     scores = score_tracks(result, scene.truth, args.tol)
     print(

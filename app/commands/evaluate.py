@@ -7,7 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from data.atomic import atomic_path
+from data.atomic import atomic_path, output_folder
 from data.csvio import write_table
 from data.errors import DataError
 from data.trackfile import FORMATS, read_tracks
@@ -17,7 +17,6 @@ from tracking.metrics import score_tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
-from ..pipeline import prepare_output_folder
 
 DEFAULT_TOLERANCE = 3.0
 
@@ -107,8 +106,7 @@ def run(args: argparse.Namespace) -> int:
     measures, clear, wrong = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
     print(format_table(measures))
     if args.out is not None:
-        prepare_output_folder(args.out)
-        with atomic_path(args.out / "evaluation.json") as temporary:
+        with output_folder(args.out), atomic_path(args.out / "evaluation.json") as temporary:
             # JSON has no NaN: a measure undefined for empty input is written as null.
             clean = {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in measures.items()}
             temporary.write_text(json.dumps(clean, indent=2) + "\n")

@@ -8,12 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
+from data.atomic import output_folder
 from data.csvio import write_table
 
 from ..error_plot import draw_line_plot, write_png
 from ..errors import UsageError
 from ..experiments import EXPERIMENTS, Experiment, Task, run_task, summarise, trackers_of
-from ..pipeline import prepare_output_folder
 from ..progress import progress_bar
 
 DEFAULT_RUNS = 100
@@ -41,33 +41,37 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
     experiment = EXPERIMENTS[args.name]
-    prepare_output_folder(args.out)
     trackers = trackers_of(experiment)
     cases = experiment.cases(args.tiny)
     tasks = [Task(experiment.name, index, run, args.tiny, trackers) for run in range(args.runs) for index in range(len(cases))]
+    with output_folder(args.out):
+        rows = _run_tasks(tasks, args.jobs, experiment.name)
+        timed = experiment.measure == "seconds"
+        # Times differ from run to run; only the experiment that measures them writes them, so
+        # every other output is the same byte for byte for the same options.
+        write_table(args.out / f"{experiment.name}.csv", _columns(rows, keep_seconds=timed))
+        summary = summarise(experiment, rows, args.tiny)
+        write_table(args.out / f"{experiment.name}-summary.csv", _columns(summary, keep_seconds=timed))
+        write_png(args.out / f"{experiment.name}.png", _plot(experiment, summary, args.runs))
+        for line in _report(experiment, summary):
+            print(line)
+    print(f"wrote {args.out / (experiment.name + '.csv')}, {experiment.name}-summary.csv and {experiment.name}.png")
+    return 0
+
+
+def _run_tasks(tasks: list[Task], jobs: int, name: str) -> list[dict]:
     rows: list[dict] = []
-    with progress_bar(len(tasks), f"{experiment.name}", unit="run") as bar:
-        if args.jobs == 1:
-            results = map(run_task, tasks)
-            for result in results:
+    with progress_bar(len(tasks), name, unit="run") as bar:
+        if jobs == 1:
+            for result in map(run_task, tasks):
                 rows.extend(result)
                 bar.update(1)
         else:
-            with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            with ProcessPoolExecutor(max_workers=jobs) as pool:
                 for result in pool.map(run_task, tasks):
                     rows.extend(result)
                     bar.update(1)
-    timed = experiment.measure == "seconds"
-    # Times differ from run to run; only the experiment that measures them writes them, so
-    # every other output is the same byte for byte for the same options.
-    write_table(args.out / f"{experiment.name}.csv", _columns(rows, keep_seconds=timed))
-    summary = summarise(experiment, rows, args.tiny)
-    write_table(args.out / f"{experiment.name}-summary.csv", _columns(summary, keep_seconds=timed))
-    write_png(args.out / f"{experiment.name}.png", _plot(experiment, summary, args.runs))
-    for line in _report(experiment, summary):
-        print(line)
-    print(f"wrote {args.out / (experiment.name + '.csv')}, {experiment.name}-summary.csv and {experiment.name}.png")
-    return 0
+    return rows
 
 
 def _columns(rows: list[dict], keep_seconds: bool) -> dict[str, np.ndarray]:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from data.atomic import output_folder
 from data.frames import open_frames
 from data.trackfile import FORMATS, read_tracks
 
 from ..error_plot import write_png
 from ..errors import UsageError
-from ..pipeline import prepare_output_folder
 from ..progress import progress_bar
 from ..review import draw_review_page
 from ..wording import counted
@@ -39,9 +39,8 @@ def run(args: argparse.Namespace) -> int:
     tracks = read_tracks(args.tracks, args.format)
     last = tracks.first_frame + tracks.n_frames - 1
     wanted = set(range(tracks.first_frame, last + 1, args.every)) | {last}
-    prepare_output_folder(args.out)
     written = 0
-    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
+    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source, output_folder(args.out):
         with progress_bar(source.frame_count, "review") as bar:
             for index, image in source:
                 if index in wanted:

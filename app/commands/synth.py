@@ -8,13 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
+from data.atomic import output_folder
 from data.csvio import write_table
 from data.psmg import PSMGSpec, generate_psmg
 from data.trackfile import write_tracks
 
 from ..errors import UsageError
 from ..experiments import BASE
-from ..pipeline import prepare_output_folder
 
 # Option name -> PSMGSpec field, for the float parameters; the defaults are the base scene of
 # ``seedtrack experiment``.
@@ -100,10 +100,10 @@ def run(args: argparse.Namespace) -> int:
         frames, truth = generate_psmg(spec)
     except ValueError as error:
         raise UsageError(f"{error}; use a larger --size or a lower --mean-speed") from None
-    prepare_output_folder(args.out)
     xy = np.concatenate(frames)
     frame = np.repeat(np.arange(len(frames)), [len(f) for f in frames])
-    write_table(args.out / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
-    write_tracks(args.out / "truth.csv", truth)
+    with output_folder(args.out):
+        write_table(args.out / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
+        write_tracks(args.out / "truth.csv", truth)
     print(f"{truth.n_tracks} trajectories, {len(frames)} frames, {frame.size} points; wrote {args.out / 'points.csv'}, {args.out / 'truth.csv'}")
     return 0

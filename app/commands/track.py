@@ -13,13 +13,12 @@ from data.csvio import TRACK_COLUMNS, read_table, write_table
 from data.errors import DataError
 from tracking.goa import GOAConfig, goa, initial_links
 from tracking.lifecycle import drop_short
-from tracking.regime import track_without_drift
 from tracking.motion import CombinedModel, IndividualModel
 from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
 
 from ..errors import UsageError
-from ..pipeline import link_frames, motion_config
+from ..pipeline import link_frames, track_with_motion
 from ..progress import progress_bar
 from ..wording import counted
 from .run import add_tracker_options, check_limits, lifecycle_config
@@ -69,9 +68,9 @@ direction and speed: seeds on a turning dish) from noisy or random motion (Brown
 flow with diffusion). Smooth motion is tracked with the smooth-motion model IM2 and, without
 --max-speed, no speed limit: the smoothness limit --phi-max bounds a moving point and the first links
 are chosen among each point's nearest neighbours. Noisy or random motion is tracked by nearest
-neighbour (IM1 on squared distances, the likelihood of Gaussian steps) within a speed limit of the
-drift plus 5 sigma of the step noise, both estimated from those links, unless --max-speed or
---individual-model says otherwise. When too few links are unambiguous to tell (fast or crowded
+neighbour (IM1 on squared distances, the likelihood of Gaussian steps) in a frame moving with the
+median step (the drift), within a speed limit of 5 sigma of the step noise about it, both estimated
+from those links, unless --max-speed or --individual-model says otherwise. When too few links are unambiguous to tell (fast or crowded
 scenes), smooth motion is assumed. --motion smooth or random skips the measurement.
 
 POINTS.csv must hold at least two frames; a file with only a header, a single frame, a missing
@@ -213,20 +212,20 @@ def track_points(points: Points, args: argparse.Namespace) -> Tracks:
     frames, first = points.frames, points.first_frame
     if args.algorithm not in _GOA_FAMILY:
         return drop_short(run_tracker(args.algorithm, frames, args.max_speed, first), args.min_length)
-    config, drift = motion_config(frames, goa_config(args), args.motion or "auto", keep_model=args.individual_model is not None)
     if args.algorithm == "goa":
 
-        def track(moved: list[np.ndarray]) -> Tracks:
+        def track(moved: list[np.ndarray], config: GOAConfig) -> Tracks:
             with progress_bar(len(moved) - 2, "tracking", unit="step") as bar:
                 return goa(moved, initial_links(moved, config), config, first, progress=bar.update)
 
     else:
         lifecycle = None if args.algorithm == "goa-updown-fixed" else lifecycle_config(args)
 
-        def track(moved: list[np.ndarray]) -> Tracks:
+        def track(moved: list[np.ndarray], config: GOAConfig) -> Tracks:
             return link_frames(moved, config, lifecycle, first)
 
-    tracks = track_without_drift(frames, drift, track)
+    keep_model = args.individual_model is not None
+    tracks = track_with_motion(frames, goa_config(args), args.motion or "auto", track, keep_model)
     return drop_short(tracks, args.min_length)
 
 

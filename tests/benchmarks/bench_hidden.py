@@ -12,11 +12,11 @@ from __future__ import annotations
 import argparse
 import statistics
 
+from app.pipeline import track_with_motion
 from data.dish import DishSpec, make_dish_scene
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig, goa_updown_open
 from tracking.metrics import score_tracks
-from tracking.regime import choose_motion, fit_motion, track_without_drift
 
 SEEDS = 80
 GAPS = (2, 5, 10)
@@ -33,8 +33,9 @@ def seeds_kept(spec: DishSpec) -> int:
     """Seeds that one track follows over every frame they are seen."""
     scene = make_dish_scene(spec)
     frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
-    config, drift = fit_motion(GOAConfig(), choose_motion(frames))
-    tracks = track_without_drift(frames, drift, lambda moved: goa_updown_open(moved, config, LifecycleConfig()))
+    tracks = track_with_motion(
+        frames, GOAConfig(), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
+    )
     return score_tracks(tracks, scene.truth, tolerance=0.5).correct_tracks
 
 

@@ -18,7 +18,8 @@ from typing import Callable
 
 import numpy as np
 
-from app.peers import PEERS, PeerFailure
+from app.peers import PEERS, PeerFailure, trackpy_linker
+from app.pipeline import track_with_motion
 from data.dish import DishSpec, make_dish_scene
 from data.psmg import PSMGSpec, generate_psmg
 from data.walkers import WalkerSpec, generate_walkers
@@ -26,7 +27,6 @@ from tracking.clear_mot import clear_mot
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig, goa_updown_open
 from tracking.metrics import score_tracks
-from tracking.regime import choose_motion, fit_motion, track_without_drift
 from tracking.tracks import Tracks
 
 Scene = tuple[list[np.ndarray], Tracks, float]
@@ -74,28 +74,16 @@ SCENES: dict[str, Callable[[int], Scene]] = {
 
 
 def seedtrack_default(frames: list[np.ndarray], _limit: float) -> Tracks:
-    """What ``seedtrack track`` does with no options."""
-    config, drift = fit_motion(GOAConfig(), choose_motion(frames))
-    return track_without_drift(frames, drift, lambda moved: goa_updown_open(moved, config, LifecycleConfig()))
-
-
-def trackpy_memory(frames: list[np.ndarray], limit: float) -> Tracks:
-    import trackpy
-
-    from app.peers import _table, _tracks
-
-    trackpy.quiet()
-    try:
-        linked = trackpy.link(_table(frames), limit, memory=3)
-    except Exception as error:  # as PEERS["trackpy"] does
-        raise PeerFailure(f"{type(error).__name__}: {error}") from None
-    return _tracks(linked, "particle", 0)
+    """What ``seedtrack track`` does with no options (the motion line of every run unsaid)."""
+    return track_with_motion(
+        frames, GOAConfig(), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
+    )
 
 
 TRACKERS: dict[str, Callable[[list[np.ndarray], float], Tracks]] = {
     "seedtrack (no options)": seedtrack_default,
     "trackpy": lambda frames, limit: PEERS["trackpy"](frames, limit, 0),
-    "trackpy memory 3": trackpy_memory,
+    "trackpy memory 3": lambda frames, limit: trackpy_linker("plain", memory=3)(frames, limit, 0),
     "laptrack": lambda frames, limit: PEERS["laptrack"](frames, limit, 0),
 }
 
