@@ -1,6 +1,9 @@
 """Counts in the messages people read."""
 
+from __future__ import annotations
 
-def counted(count: int, noun: str) -> str:
-    """``"1 frame"``, ``"3 frames"``: the count and the noun, plural unless the count is one."""
-    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"
+
+def counted(count: int, noun: str, plural: str | None = None) -> str:
+    """``"1 frame"``, ``"3 frames"``: the count and the noun, plural (``noun + "s"`` unless
+    given) when the count is not one."""
+    return f"{count} {noun}" if count == 1 else f"{count} {plural or noun + 's'}"

@@ -6,6 +6,7 @@ The detection options are defined here once and shared by every command that det
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from data.frames import IMAGE_SUFFIXES
 from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from detection.roi import Circle
 
-from ..errors import UsageError
+from ..errors import UsageError, option_name
 from ..render import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
@@ -127,20 +128,13 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
     return DetectionSettings(options, args.detector, _roi(args.roi), args.start, args.end, args.step)
 
 
-# BlobOptions names its fields in its errors; a user knows the options.
-_OPTION_OF_FIELD = {
-    "polarity": "--polarity",
-    "background_size": "--background-size",
-    "background": "--background",
-    "threshold": "--threshold",
-    "min_area_px": "--min-area",
-    "max_area_px": "--max-area",
-}
+# BlobOptions names its fields in its errors; a user knows the options. Longest names first, so
+# that background_size is not read as background.
+_FIELDS = re.compile(r"\b(" + "|".join(sorted((f.name for f in dataclasses.fields(BlobOptions)), key=len, reverse=True)) + r")\b")
 
 
 def _in_option_names(message: str) -> str:
-    fields = re.compile(r"\b(" + "|".join(_OPTION_OF_FIELD) + r")\b")
-    return fields.sub(lambda match: _OPTION_OF_FIELD[match.group(1)], message)
+    return _FIELDS.sub(lambda match: option_name(match.group(1)), message)
 
 
 def _roi(text: str) -> str | Circle | Path:

@@ -15,6 +15,7 @@ from ..error_plot import draw_line_plot, write_png
 from ..errors import UsageError
 from ..experiments import EXPERIMENTS, Experiment, Task, run_task, summarise, trackers_of
 from ..progress import progress_bar
+from ..wording import counted
 
 DEFAULT_RUNS = 100
 
@@ -95,7 +96,7 @@ def _plot(experiment: Experiment, summary: list[dict], runs: int) -> np.ndarray:
         by_x = {float(e[swept]): e for e in summary if e["tracker"] == tracker}
         series[tracker] = np.array([by_x[v][column] if v in by_x else np.nan for v in x])
         intervals[tracker] = np.array([by_x[v][column + "_ci95"] if v in by_x else 0.0 for v in x])
-    return draw_line_plot(x, series, f"{experiment.name}: {experiment.title}, {runs} runs", experiment.x_label, label, intervals)
+    return draw_line_plot(x, series, f"{experiment.name}: {experiment.title}, {counted(runs, 'run')}", experiment.x_label, label, intervals)
 
 
 def _merit_plot(experiment: Experiment, summary: list[dict], runs: int) -> np.ndarray:
@@ -111,7 +112,7 @@ def _merit_plot(experiment: Experiment, summary: list[dict], runs: int) -> np.nd
                 intervals[f"{tracker} {tag}"] = np.array([by_x[v]["merit_ci95"] if v in by_x else 0.0 for v in x])
             by_x = {float(e["trajectories"]): e["published_ipan"] for e in mine}
             series[f"published {tag}"] = np.array([by_x.get(v, np.nan) for v in x])
-    return draw_line_plot(x, series, f"ipan-table: {experiment.title}, {runs} runs", experiment.x_label, "", intervals)
+    return draw_line_plot(x, series, f"ipan-table: {experiment.title}, {counted(runs, 'run')}", experiment.x_label, "", intervals)
 
 
 def _report(experiment: Experiment, summary: list[dict]) -> list[str]:

@@ -71,7 +71,7 @@ def check_view_options(args: argparse.Namespace) -> str | None:
         If an output file's folder does not exist.
     """
     if args.out is None and getattr(args, "summary", None) is None:
-        raise UsageError("give --out" + (" or --summary" if hasattr(args, "summary") else ""))
+        raise UsageError("give --out or --summary")  # compare requires --out; only render gets here
     if args.trail < 0:
         raise UsageError(f"--trail must be >= 0, got {args.trail}")
     if args.fps is not None and not args.fps > 0:
@@ -80,9 +80,10 @@ def check_view_options(args: argparse.Namespace) -> str | None:
     if args.frame is not None and kind != "png":
         raise UsageError("--frame chooses the frame of a .png output; use --start/--end/--step for clips")
     # A missing folder is found now rather than after the whole clip has been drawn.
-    for target in (args.out if kind not in (None, "folder") else None, getattr(args, "summary", None)):
-        if target is not None:
-            check_target(target)
+    if kind not in (None, "folder"):
+        check_target(args.out)
+    if getattr(args, "summary", None) is not None:
+        check_target(args.summary)
     return kind
 
 

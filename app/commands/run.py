@@ -10,7 +10,7 @@ from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig
 from tracking.regime import MOTIONS
 
-from ..errors import UsageError
+from ..errors import UsageError, option_name
 from ..pipeline import run_pipeline
 from ..wording import counted
 from .detect import add_detection_options, detection_settings
@@ -65,20 +65,20 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def check_limits(args: argparse.Namespace, options: tuple[str, ...] = ("max_speed", "phi_max")) -> None:
-    """Refuse a speed or angle limit that is not a positive finite number (``min_speed`` may be 0).
+def check_limits(args: argparse.Namespace, positive: tuple[str, ...] = ("max_speed", "phi_max"), non_negative: tuple[str, ...] = ()) -> None:
+    """Refuse a tracker limit given that is not a finite number above zero (``positive``) or at
+    least zero (``non_negative``).
 
     Raises
     ------
     UsageError
         Naming the option as typed.
     """
-    for option in options:
-        value = getattr(args, option)
-        allow_zero = option == "min_speed"
-        if value is not None and not (math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
-            kind = "a non-negative" if allow_zero else "a positive"
-            raise UsageError(f"--{option.replace('_', '-')} must be {kind} finite number, got {value:g}")
+    for options, kind, allowed in ((positive, "a positive", lambda v: v > 0), (non_negative, "a non-negative", lambda v: v >= 0)):
+        for option in options:
+            value = getattr(args, option)
+            if value is not None and not (math.isfinite(value) and allowed(value)):
+                raise UsageError(f"{option_name(option)} must be {kind} finite number, got {value:g}")
 
 
 def tracker_config(args: argparse.Namespace) -> GOAConfig:
@@ -107,7 +107,7 @@ def lifecycle_config(args: argparse.Namespace) -> LifecycleConfig | None:
     for option in ("max_gap", "min_length"):
         value = getattr(args, option)
         if value is not None and value < 0:
-            raise UsageError(f"--{option.replace('_', '-')} must be a whole number of frames >= 0, got {value}")
+            raise UsageError(f"{option_name(option)} must be a whole number of frames >= 0, got {value}")
     if args.fixed_count:
         if args.max_gap is not None:
             raise UsageError("--max-gap does not apply with --fixed-count (no track ends)")

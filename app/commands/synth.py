@@ -13,8 +13,9 @@ from data.csvio import write_table
 from data.psmg import PSMGSpec, generate_psmg
 from data.trackfile import write_tracks
 
-from ..errors import UsageError
+from ..errors import UsageError, option_name
 from ..experiments import BASE
+from ..wording import counted
 
 # Option name -> PSMGSpec field, for the float parameters; the defaults are the base scene of
 # ``seedtrack experiment``.
@@ -50,7 +51,7 @@ def add_parser(subparsers) -> None:
     psmg.add_argument("--frames", type=int, default=BASE.frames, metavar="N", help=f"number of frames (default {BASE.frames})")
     for option, (name, text) in _FLOAT_OPTIONS.items():
         default = getattr(BASE, name)
-        psmg.add_argument(f"--{option.replace('_', '-')}", type=float, default=default, help=f"{text} (default {default:g})")
+        psmg.add_argument(option_name(option), type=float, default=default, help=f"{text} (default {default:g})")
     psmg.add_argument("--max-speed", type=float, default=None, metavar="PX", help="largest speed, pixels/frame (default twice --mean-speed)")
     psmg.add_argument("--max-gap", type=int, default=1, metavar="N", help="longest occlusion, frames; each lasts 1 to N (default 1)")
     psmg.add_argument(
@@ -76,7 +77,7 @@ def psmg_spec(args: argparse.Namespace) -> PSMGSpec:
         values["max_speed"] = args.max_speed
     for name, value in values.items():
         if not math.isfinite(value):
-            raise UsageError(f"--{name.replace('_', '-')} must be a finite number, got {value:g}")
+            raise UsageError(f"{option_name(name)} must be a finite number, got {value:g}")
     if args.max_speed is not None and not args.max_speed > 0:
         raise UsageError(f"--max-speed must be positive, got {args.max_speed:g}")
     if args.tracks < 1 or args.frames < 2:
@@ -105,5 +106,5 @@ def run(args: argparse.Namespace) -> int:
     with output_folder(args.out):
         write_table(args.out / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
         write_tracks(args.out / "truth.csv", truth)
-    print(f"{truth.n_tracks} trajectories, {len(frames)} frames, {frame.size} points; wrote {args.out / 'points.csv'}, {args.out / 'truth.csv'}")
+    print(f"{counted(truth.n_tracks, 'trajectory', 'trajectories')}, {len(frames)} frames, {counted(frame.size, 'point')}; wrote {args.out / 'points.csv'}, {args.out / 'truth.csv'}")
     return 0

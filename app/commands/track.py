@@ -17,7 +17,7 @@ from tracking.motion import CombinedModel, IndividualModel
 from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
 
-from ..errors import UsageError
+from ..errors import UsageError, option_name
 from ..pipeline import link_frames, track_with_motion
 from ..progress import progress_bar
 from ..wording import counted
@@ -192,15 +192,15 @@ def goa_config(args: argparse.Namespace) -> GOAConfig:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    check_limits(args, ("max_speed", "min_speed", "phi_max"))
+    check_limits(args, non_negative=("min_speed",))
     if args.min_speed is not None and args.max_speed is not None and args.min_speed >= args.max_speed:
         raise UsageError(f"--min-speed ({args.min_speed:g}) must be below --max-speed ({args.max_speed:g})")
     if args.algorithm not in _GOA_FAMILY:
-        given = [f"--{name.replace('_', '-')}" for name in _GOA_ONLY if getattr(args, name) is not None]
+        given = [option_name(name) for name in _GOA_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
     if args.algorithm != "goa-updown":
-        given = [f"--{name.replace('_', '-')}" for name in _OPEN_ONLY if getattr(args, name) is not None]
+        given = [option_name(name) for name in _OPEN_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} only apply to --algorithm goa-updown, not {args.algorithm}")
     lifecycle_config(args)
@@ -251,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
     rows = track_rows(points, tracks)
     write_table(args.out, rows)
     print(
-        f"{len(points.frames)} frames, {sum(f.shape[0] for f in points.frames)} points, {counted(tracks.n_tracks, 'track')}, "
-        f"{int(rows['interpolated'].sum())} interpolated positions; wrote {args.out}"
+        f"{len(points.frames)} frames, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "
+        f"{counted(tracks.n_tracks, 'track')}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}"
     )
     return 0
