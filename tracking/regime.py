@@ -133,8 +133,10 @@ class _Frame(NamedTuple):
         """The frame turned half a turn about the centre of its bounding box.
 
         A point reflection keeps every distance, so the spacing is kept rather than measured
-        again.
+        again. A frame of under two points has no centre to speak of (and links nothing).
         """
+        if self.points.shape[0] < 2:
+            return self
         turned = self.points.min(axis=0) + self.points.max(axis=0) - self.points
         return _Frame(turned, cKDTree(turned), self.spacing)
 
