@@ -51,6 +51,7 @@ TINY = replace(BASE, trajectories=8, frames=6, size=80.0)
 # Points are matched to the truth within this distance, pixels; trackers report measured
 # positions exactly, so any positive tolerance below the point spacing gives the same scores.
 TOLERANCE = 0.5
+# Standard errors in a two-sided 95% normal interval.
 Z_95 = 1.96
 
 # Published strict trajectory merits (%) of IPAN, self-initialising, PSMG without entry/exit,
@@ -309,6 +310,16 @@ def run_task(task: Task) -> list[dict]:
     return rows
 
 
+def ci95(values) -> float:
+    """Half-width of the 95% confidence interval of the mean of ``values``.
+
+    Normal approximation: 1.96 standard errors (sample standard deviation over the square
+    root of the count), in the values' units; 0 for fewer than two values.
+    """
+    values = np.asarray(values, dtype=float)
+    return float(Z_95 * values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
+
+
 def summarise(experiment: Experiment, rows: list[dict], tiny: bool) -> list[dict]:
     """Mean and 95% interval per case and tracker; failed runs are counted, not averaged.
 
@@ -326,7 +337,7 @@ def summarise(experiment: Experiment, rows: list[dict], tiny: bool) -> list[dict
             for column in ("track_error", "relaxed_error", "link_error", "seconds"):
                 values = np.array([r[column] for r in ok], float)
                 entry[column] = float(values.mean()) if values.size else math.nan
-                entry[column + "_ci95"] = float(Z_95 * values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
+                entry[column + "_ci95"] = ci95(values)
             if experiment.measure == "merit":
                 entry["merit"] = 100.0 * (1.0 - entry["track_error"])
                 entry["merit_ci95"] = 100.0 * entry["track_error_ci95"]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from app.experiments import EXPERIMENTS, Task, run_task, trackers_of
+from app.experiments import EXPERIMENTS, Task, ci95, run_task, trackers_of
 from app.peers import PEERS, PeerFailure, peers_available
 from data.csvio import read_table
 from data.psmg import PSMGSpec, generate_psmg
@@ -95,12 +95,17 @@ def test_every_experiment_runs_at_a_tiny_size(name, tmp_path, capsys):
     if name == "ipan-table":
         assert "published_ipan" in summary and "merit" in summary
     assert ("seconds" in results) == (name == "volume")
+    if name != "models":
+        # Every tracker comparison scores the open GOA-updown, the paper's and IPAN in each case.
+        for tracker in ("goa-updown", "goa-updown-fixed", "ipan"):
+            rows = summary["tracker"] == tracker
+            assert rows.sum() == len(cases) and not summary["failures"][rows].any(), tracker
 
 
-def test_tracker_comparisons_show_the_open_and_the_published_goa_updown():
-    for experiment in EXPERIMENTS.values():
-        if experiment.name != "models":
-            assert {"goa-updown", "goa-updown-fixed", "ipan"} <= set(experiment.trackers), experiment.name
+def test_ci95_is_1_96_standard_errors_and_0_without_a_spread():
+    # 1 and 3: sample standard deviation sqrt(2), standard error sqrt(2) / sqrt(2) = 1.
+    assert ci95([1.0, 3.0]) == pytest.approx(1.96)
+    assert ci95([5.0]) == 0.0
 
 
 def test_same_options_give_the_same_files(tmp_path):

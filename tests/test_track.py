@@ -9,6 +9,7 @@ import pytest
 from app.cli import main
 from data.csvio import read_table, write_table
 from data.psmg import PSMGSpec, generate_psmg
+from data.walkers import WalkerSpec, generate_walkers
 from tracking.trackers import TRACKERS
 from tracking.tracks import Tracks
 
@@ -92,6 +93,21 @@ def test_a_frame_number_without_points_is_bridged(tmp_path, algorithm):
     assert list(tracks["interpolated"]) == [0, 0, 0, 1, 0, 0, 0] * 2
     assert np.allclose(tracks["x"][:7], np.arange(10, 24, 2)) and np.allclose(tracks["y"][7:], np.arange(50, 71, 3))
     assert list(tracks["area"]) == ["5", "5", "5", "", "5", "5", "5", "6", "6", "6", "", "6", "6", "6"]
+
+
+def test_random_walkers_with_a_frame_number_without_points_are_tracked(tmp_path, capsys):
+    # Enough walkers for the motion to be measured as random, which asks how many links would
+    # arise by chance: that check once failed on the empty frame.
+    frames, _ = generate_walkers(WalkerSpec(walkers=150, frames=8, size=256.0, random_seed=1))
+    kept = [k for k in range(len(frames)) if k != 4]
+    frame = np.concatenate([np.full(len(frames[k]), k) for k in kept])
+    xy = np.concatenate([frames[k] for k in kept])
+    write_table(tmp_path / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
+    out = tmp_path / "tracks.csv"
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(out)]) == 0
+    assert "motion: random motion" in capsys.readouterr().out
+    tracks = read_table(out)
+    assert np.all(tracks["interpolated"][tracks["frame"] == 4] == 1) and np.any(tracks["frame"] == 4)
 
 
 def test_track_goa_options_are_refused_by_other_trackers(scene, tmp_path):

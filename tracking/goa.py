@@ -47,14 +47,17 @@ class GOAConfig:
     d_min : float
         Smallest speed, pixels/frame.
     corner : {"phi", "zero"}
-        Weight of the false-track/slave block of the augmented matrix. "zero" is the reference
-        code's: a head left without a link and a measurement left without one then cost
-        2 phi_max together, so two links of phi_max each beat one perfect link. "phi" (default)
-        charges phi_max per unlinked head only, so the assignment prefers fewer, better links. A
-        fast dish whose seeds are missed now and then is where this matters (rim speed 42
-        px/frame, 5% of the seeds hidden in each frame: 198 of 240 seeds tracked right against
-        129 with "zero"; 30 px/frame, 10% hidden: 189 against 98); on PSMG and random walkers
-        the two agree or "phi" is slightly better.
+        Weight of the false-track/slave block of the augmented matrix. Each link also puts one false
+        track on one slave, so against leaving its head on a slave and its measurement on a false
+        track it changes the total by weight + corner - 2 u, u being the slave and false-track
+        weight (phi_max; phi_max**z under CM1). "zero", the reference code's, makes a link worth
+        taking whenever its weight is below 2 u: every gated link is, and two links of weight u each
+        tie with one perfect link (both lower the total by 2 u). "phi" (default, corner u) makes it
+        worth taking only below u: one perfect link beats two of weight u (which change nothing), so
+        the assignment prefers fewer, better links. A fast dish whose seeds are missed now and then
+        is where this matters (rim speed 42 px/frame, 5% of the seeds hidden in each frame: 198 of
+        240 seeds tracked right against 129 with "zero"; 30 px/frame, 10% hidden: 189 against 98);
+        on PSMG and random walkers the two agree or "phi" is slightly better.
     initialisation : {"lookahead", "im1"}
         How GOA-updown picks the first links. "im1" is the paper's: optimal nearest-neighbour
         assignment of frames 0 and 1. "lookahead" (default) scores each frame 0-1 link by the

@@ -28,6 +28,7 @@ _CONTINUATIONS = 3
 # seeds): share 0 -> 0.051 / 0.111, 0.2 -> 0.047 / 0.045, 0.5 -> 0.047 / 0.045; the dishes stay
 # 80/80 up to 0.5 and fail at 1 (the paper's IM1 alone).
 _NEAREST_SHARE = 0.3
+_LINEAR_IM1 = IndividualModel("im1")
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -100,13 +101,11 @@ def first_links(
         valid &= speed <= d_max
     head, measurement = head[valid], measurement[valid]
     scale = d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)
-    if horizon < 3 and link_model.order == 1:
-        # The nearest-neighbour scheme alone: the model's own IM1 (its power and drift).
-        single = np.ones(head.size, np.int64)
-        pairs = Candidates(head, measurement, velocity[valid], single, np.full((head.size, 2), np.nan))
-        return head, measurement, link_model.cost(pairs, phi_max, scale)
-    # IM1: dividing first keeps the fastest link at exactly phi_max, not a rounding step above.
-    nearest = phi_max * (speed[valid] / scale)
+    # Without a lookahead an IM1 link model scores by its own cost (its power, 1 or 2); otherwise
+    # the paper's linear IM1, the cost _NEAREST_SHARE was measured with.
+    nearest_model = link_model if horizon < 3 and link_model.order == 1 else _LINEAR_IM1
+    pairs = Candidates(head, measurement, velocity[valid], np.ones(head.size, np.int64), np.full((head.size, 2), np.nan))
+    nearest = nearest_model.cost(pairs, phi_max, scale)
     if horizon < 3:
         return head, measurement, nearest
 

@@ -18,7 +18,7 @@ few links are unambiguous to tell (dense or fast scenes), the smooth-motion defa
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Callable, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -113,17 +113,44 @@ def unambiguous_links(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndar
         The longest step that would have been kept for each linked point (0.4 times that
         spacing), pixels; NaN where unlinked. Needed to undo the bias against long steps.
     """
-    link = np.full(a.shape[0], -1, dtype=np.int64)
-    reach = np.full(a.shape[0], np.nan)
-    if a.shape[0] < 2 or b.shape[0] < 2:
+    return _links(_Frame.of(a), _Frame.of(b))
+
+
+class _Frame(NamedTuple):
+    """One frame's positions with the search tree and spacing every link test needs."""
+
+    points: np.ndarray
+    tree: cKDTree
+    # Distance from each point to the nearest other point of its frame, pixels.
+    spacing: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray) -> "_Frame":
+        tree = cKDTree(points)
+        return cls(points, tree, tree.query(points, k=2)[0][:, 1])
+
+    def half_turned(self) -> "_Frame":
+        """The frame turned half a turn about the centre of its bounding box.
+
+        A point reflection keeps every distance, so the spacing is kept rather than measured
+        again. A frame of under two points has no centre to speak of (and links nothing).
+        """
+        if self.points.shape[0] < 2:
+            return self
+        turned = self.points.min(axis=0) + self.points.max(axis=0) - self.points
+        return _Frame(turned, cKDTree(turned), self.spacing)
+
+
+def _links(a: _Frame, b: _Frame) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unambiguous_links` on frames whose trees and spacings are built once."""
+    link = np.full(a.points.shape[0], -1, dtype=np.int64)
+    reach = np.full(a.points.shape[0], np.nan)
+    if a.points.shape[0] < 2 or b.points.shape[0] < 2:
         return link, reach
-    tree_a, tree_b = cKDTree(a), cKDTree(b)
-    spacing_a = tree_a.query(a, k=2)[0][:, 1]
-    spacing_b = tree_b.query(b, k=2)[0][:, 1]
-    distance, forward = tree_b.query(a)
-    backward = tree_a.query(b)[1]
-    mutual = backward[forward] == np.arange(a.shape[0])
-    bound = _CLEAR_FRACTION * np.minimum(spacing_a, spacing_b[forward])
+    distance, forward = b.tree.query(a.points)
+    backward = a.tree.query(b.points)[1]
+    mutual = backward[forward] == np.arange(a.points.shape[0])
+    bound = _CLEAR_FRACTION * np.minimum(a.spacing, b.spacing[forward])
     keep = mutual & (distance < bound)
     link[keep] = forward[keep]
     reach[keep] = bound[keep]
@@ -186,10 +213,11 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     if motion == "smooth":
         return MotionChoice("im2", None, float("nan"), 0, "smooth motion, as asked")
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
-    pairs = list(zip(frames[:-1], frames[1:]))
+    indexed = [_Frame.of(f) for f in frames]
+    pairs = list(zip(indexed[:-1], indexed[1:]))
     links, reaches = [], []
     for a, b in pairs:
-        link, reach = unambiguous_links(a, b)
+        link, reach = _links(a, b)
         links.append(link)
         reaches.append(reach)
     real = sum(int(np.count_nonzero(link >= 0)) for link in links)
@@ -224,9 +252,7 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     else:
         why = f"random motion: steps turn at random (median turning cosine {persistence:.2f} over {triplets} chains)"
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
-    coincidence = sum(
-        int(np.count_nonzero(unambiguous_links(a, b.min(axis=0) + b.max(axis=0) - b)[0] >= 0)) for a, b in pairs
-    ) / real
+    coincidence = sum(int(np.count_nonzero(_links(a, b.half_turned())[0] >= 0)) for a, b in pairs) / real
     if coincidence > _MAX_COINCIDENCE:
         return MotionChoice(
             "im2", None, persistence, triplets,

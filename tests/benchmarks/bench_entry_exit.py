@@ -4,7 +4,7 @@ Run as ``python tests/benchmarks/bench_entry_exit.py [--clips N]``. The experime
 (50 points in 200 x 200 px on average, speed 5 px/frame) with points drawn in a larger square so
 that they enter and leave, speed limit 10 px/frame for every tracker. Prints the strict
 trajectory merit (a trajectory counts only if one track follows it over every frame it is
-measured in, 0.5 px) as the mean over N clips with a 95% interval (1.96 standard errors).
+measured in, 0.5 px) as the mean over N clips with a 95% interval (1.96 standard errors, app.experiments.ci95).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import argparse
 import statistics
 from dataclasses import replace
 
-from app.experiments import BASE
+from app.experiments import BASE, ci95
 from data.psmg import generate_psmg
 from tracking.goa import GOAConfig
 from tracking.lifecycle import LifecycleConfig, goa_updown_open
@@ -51,8 +51,7 @@ def main() -> None:
             for frames, truth in clips[label]:
                 scores = score_tracks(track(frames, limit), truth, 0.5)
                 merit.append(100.0 * scores.correct_tracks / scores.true_tracks)
-            interval = 1.96 * statistics.stdev(merit) / len(merit) ** 0.5 if len(merit) > 1 else 0.0
-            cells.append(f"{statistics.mean(merit):.1f} % +- {interval:.1f}")
+            cells.append(f"{statistics.mean(merit):.1f} % +- {ci95(merit):.1f}")
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
