@@ -28,7 +28,7 @@ def test_random_walkers_get_nearest_neighbour_and_a_speed_limit_from_their_steps
     assert choice.individual_model == "im1"
     assert abs(choice.persistence) < 0.2
     # 5 sigma of 1.5 px/axis, from steps seen only where they are unambiguous.
-    assert 6.8 < choice.max_speed < 8.2
+    assert 6.8 < choice.speed_limit < 8.2 and np.hypot(*choice.drift) < 0.2
     assert choice.reason.startswith("random motion")
 
 
@@ -37,7 +37,8 @@ def test_flow_with_diffusion_is_tracked_as_noisy_not_smooth():
     choice = choose_motion(points)
     assert choice.individual_model == "im1" and choice.persistence > 0.8
     assert choice.reason.startswith("noisy motion")
-    assert 7.0 < choice.max_speed < 9.0
+    # 5 sigma of 1 px/axis about the drift of 3 px/frame.
+    assert 4.4 < choice.speed_limit < 5.6 and choice.drift == pytest.approx((3.0, 0.0), abs=0.15)
 
 
 @pytest.mark.parametrize("rim_speed", [5.0, 42.0])
@@ -45,14 +46,21 @@ def test_a_turning_dish_keeps_the_smooth_motion_model(rim_speed):
     scene = make_dish_scene(DishSpec(seeds=80, frames=10, rim_speed=rim_speed, random_seed=2))
     points = [scene.truth.xy[:, k] for k in range(10)]
     choice = choose_motion(points)
-    assert (choice.individual_model, choice.max_speed) == ("im2", None), choice.reason
+    assert (choice.individual_model, choice.speed_limit) == ("im2", None), choice.reason
 
 
 def test_smooth_psmg_keeps_the_smooth_motion_model():
     frames, _ = generate_psmg(PSMGSpec(trajectories=100, frames=20, random_seed=4))
     choice = choose_motion(frames)
-    assert (choice.individual_model, choice.max_speed) == ("im2", None)
+    assert (choice.individual_model, choice.speed_limit) == ("im2", None)
     assert choice.persistence > 0.9
+
+
+def test_a_frame_without_points_is_measured_around():
+    points, _ = walkers(sigma=1.5)
+    points[10] = np.empty((0, 2))
+    choice = choose_motion(points)
+    assert choice.individual_model == "im1" and 6.8 < choice.speed_limit < 8.2
 
 
 def test_too_few_points_to_tell_keep_the_default():
@@ -76,7 +84,7 @@ def test_fit_motion_keeps_what_the_user_set():
     fitted, drift = fit_motion(GOAConfig(), choice)
     assert fitted.individual == IndividualModel("im1", power=2) and fitted.initialisation == "im1"
     # The limit is about the drift, which is taken out of the positions.
-    assert fitted.d_max == choice.noise_limit < choice.max_speed and drift == choice.drift
+    assert fitted.d_max == choice.speed_limit and drift == choice.drift
     assert drift == pytest.approx((1.0, 0.5), abs=0.2)
     mine, kept_drift = fit_motion(GOAConfig(individual=IndividualModel("im3"), d_max=9.0), choice, keep_model=True)
     assert mine.individual.name == "im3" and mine.d_max == 9.0 and kept_drift == (0.0, 0.0)

@@ -70,8 +70,9 @@ class MotionChoice:
     ----------
     individual_model : {"im2", "im1"}
         GOA individual model: "im2" smooth motion, "im1" nearest neighbour.
-    max_speed : float or None
-        Speed limit, pixels/frame (GOA's d_max); None for no limit (with "im2").
+    speed_limit : float or None
+        Speed limit, pixels/frame (GOA's d_max), about the drift: 5 sigma of the per-axis step
+        noise (at least 1); None for no limit (with "im2").
     persistence : float
         Median cosine of the turning angle between consecutive unambiguous steps (1 straight
         on, 0 random walk, negative for jitter about a fixed position); NaN when there were
@@ -79,20 +80,17 @@ class MotionChoice:
     triplets : int
         Number of unambiguous three-frame chains measured.
     drift : tuple of float
-        Mean step (x, y), pixels/frame, of random motion; (0, 0) otherwise.
-    noise_limit : float or None
-        Speed limit about the drift, pixels/frame: 5 sigma of the step noise (at least 1).
+        Median step (x, y), pixels/frame, of random motion; (0, 0) otherwise.
     reason : str
         One line saying why, for the user.
     """
 
     individual_model: str
-    max_speed: float | None
+    speed_limit: float | None
     persistence: float
     triplets: int
     reason: str
     drift: tuple[float, float] = (0.0, 0.0)
-    noise_limit: float | None = None
 
 
 def unambiguous_links(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -204,9 +202,9 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     -------
     MotionChoice
         "im2" with no speed limit (the smooth-motion default) when the direction of motion
-        persists or when too few links are unambiguous to tell; otherwise "im1" with a speed
-        limit of the mean drift plus 5 sigma of the per-axis step noise (at least 1 pixel/frame),
-        both estimated from the unambiguous steps (None if there are none).
+        persists or when too few links are unambiguous to tell; otherwise "im1" with the median
+        step (the drift) and a speed limit about it of 5 sigma of the per-axis step noise (at
+        least 1 pixel/frame), both estimated from the unambiguous steps (no limit if there are none).
     """
     if motion not in MOTIONS:
         raise ValueError(f"motion must be one of {', '.join(MOTIONS)}, got {motion!r}")
@@ -269,12 +267,10 @@ def _random(
     reach = np.concatenate([r[r >= 0] for r in reaches])
     drift = np.median(steps, axis=0)
     sigma = step_sigma(np.linalg.norm(steps - drift, axis=1), reach + np.linalg.norm(drift))
-    max_speed = max(_MIN_SPEED, float(np.linalg.norm(drift)) + _SIGMAS * sigma)
     return MotionChoice(
-        "im1", max_speed, persistence, triplets,
+        "im1", max(_MIN_SPEED, _SIGMAS * sigma), persistence, triplets,
         f"{why}, step sigma {sigma:.2f} px/axis, drift {np.linalg.norm(drift):.2f} px/frame",
         (float(drift[0]), float(drift[1])),
-        max(_MIN_SPEED, _SIGMAS * sigma),
     )
 
 
@@ -291,7 +287,7 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     -------
     config : GOAConfig
     drift : tuple of float
-        Mean step (x, y) to remove, pixels/frame; (0, 0) for none.
+        Median step (x, y) to remove, pixels/frame; (0, 0) for none.
     """
     if choice.individual_model != "im1":
         return config, (0.0, 0.0)
@@ -299,8 +295,8 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     if not keep_model:
         changes["individual"] = IndividualModel("im1", power=2)
     drift = (0.0, 0.0)
-    if config.d_max is None and choice.max_speed is not None:
-        changes["d_max"] = choice.noise_limit
+    if config.d_max is None and choice.speed_limit is not None:
+        changes["d_max"] = choice.speed_limit
         drift = choice.drift
     return replace(config, **changes), drift
 
