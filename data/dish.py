@@ -223,6 +223,11 @@ class DishScene:
     glare: np.ndarray
     dust_xy: np.ndarray
 
+    def visible_points(self) -> list[np.ndarray]:
+        """The positions (x, y), pixels, of the seeds drawn in each frame, in seed order: what
+        a perfect detector would measure."""
+        return [self.truth.xy[self.visible[:, k], k] for k in range(self.spec.frames)]
+
     def render(self, frame_index: int) -> np.ndarray:
         """Render one frame.
 

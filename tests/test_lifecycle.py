@@ -96,7 +96,7 @@ def test_min_length_drops_short_tracks_only():
 def test_every_seed_hidden_by_a_hand_comes_back_with_its_own_id(gap):
     spec = DishSpec(seeds=40, frames=10 + gap + 8, rim_speed=5.0, hidden_seeds=10, hidden_frames=gap, random_seed=gap)
     scene = make_dish_scene(spec)
-    frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+    frames = scene.visible_points()
     scores = score_tracks(goa_updown_open(frames), scene.truth, tolerance=0.5)
     assert scene.truth.interpolated.sum() == 10 * gap
     assert scores.correct_tracks == scores.true_tracks == 40
@@ -105,7 +105,7 @@ def test_every_seed_hidden_by_a_hand_comes_back_with_its_own_id(gap):
 def test_seeds_added_and_removed_mid_clip_get_tracks_of_their_own():
     spec = DishSpec(seeds=40, frames=20, rim_speed=5.0, added_seeds=5, removed_seeds=5, random_seed=3)
     scene = make_dish_scene(spec)
-    frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+    frames = scene.visible_points()
     tracks = goa_updown_open(frames)
     assert (~scene.truth.present).any(axis=1).sum() == 10
     assert score_tracks(tracks, scene.truth, tolerance=0.5).correct_tracks == 40
@@ -214,7 +214,7 @@ def test_a_fast_dish_with_seeds_missed_now_and_then_keeps_most_tracks():
     # matrix (two unlinked parts cost 2 phi_max) lets happen.
     spec = DishSpec(seeds=80, frames=20, rim_speed=42.0, hidden_probability=0.05, random_seed=3)
     scene = make_dish_scene(spec)
-    frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+    frames = scene.visible_points()
     correct = {
         corner: score_tracks(goa_updown_open(frames, GOAConfig(corner=corner)), scene.truth, tolerance=0.5).correct_tracks
         for corner in ("phi", "zero")

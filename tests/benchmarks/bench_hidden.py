@@ -32,7 +32,7 @@ ROWS = (
 def seeds_kept(spec: DishSpec) -> int:
     """Seeds that one track follows over every frame they are seen."""
     scene = make_dish_scene(spec)
-    frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+    frames = scene.visible_points()
     tracks = track_with_motion(
         frames, GOAConfig(), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
     )

@@ -54,7 +54,7 @@ def dish(**options) -> Callable[[int], Scene]:
     def make(seed: int) -> Scene:
         spec = DishSpec(seeds=80, frames=20, rim_speed=42.0, random_seed=seed, **options)
         scene = make_dish_scene(spec)
-        frames = [scene.truth.xy[scene.visible[:, k], k] for k in range(spec.frames)]
+        frames = scene.visible_points()
         return frames, scene.truth, 1.1 * spec.rim_speed
 
     return make
