@@ -7,6 +7,7 @@ Every subcommand lives in ``app.commands`` as a module with ``add_parser(subpars
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import os
 import sys
 from typing import Sequence
@@ -30,6 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="seedtrack",
         description="Track many small look-alike objects through video by their motion (GOA-updown).",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {importlib.metadata.version('seedtrack')}")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add_parser(subparsers)

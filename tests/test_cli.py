@@ -130,3 +130,10 @@ def test_output_piped_into_a_closed_reader_is_not_a_traceback(tmp_path):
     stderr = process.stderr.read()
     assert process.wait() == 141
     assert "Traceback" not in stderr
+
+
+def test_version_is_the_installed_package_version():
+    from importlib.metadata import version
+
+    result = seedtrack("--version")
+    assert result.returncode == 0 and result.stdout.strip() == f"seedtrack {version('seedtrack')}"
