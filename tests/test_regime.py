@@ -63,6 +63,17 @@ def test_a_frame_without_points_is_measured_around():
     assert choice.individual_model == "im1" and 6.8 < choice.speed_limit < 8.2
 
 
+def test_two_or_three_random_walkers_are_not_taken_for_chance():
+    # Two points are their own half turn, and nearly their own mirror image when they lie near
+    # an axis: measured that way, every link of theirs looked like chance.
+    rng = np.random.default_rng(7)
+    start = np.array([[60.0, 136.0], [178.0, 113.0]])
+    pair = list(start + np.cumsum(rng.normal(0, 2.0, (20, 2, 2)), axis=0))
+    trio, _ = walkers(count=3, frames=20)
+    for points in (pair, trio):
+        assert choose_motion(points).individual_model == "im1"
+
+
 def test_too_few_points_to_tell_keep_the_default():
     points, _ = walkers(count=5, frames=4)
     choice = choose_motion(points)

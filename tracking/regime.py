@@ -127,15 +127,15 @@ class _Frame(NamedTuple):
         tree = cKDTree(points)
         return cls(points, tree, tree.query(points, k=2)[0][:, 1])
 
-    def half_turned(self) -> "_Frame":
-        """The frame turned half a turn about the centre of its bounding box.
+    def reflected(self, axes: tuple[bool, bool]) -> "_Frame":
+        """The frame mirrored about the centre of its bounding box along x, y or both (a half turn).
 
-        A point reflection keeps every distance, so the spacing is kept rather than measured
-        again. A frame of under two points has no centre to speak of (and links nothing).
+        A reflection keeps every distance, so the spacing is kept rather than measured again.
+        A frame of under two points has no centre to speak of (and links nothing).
         """
         if self.points.shape[0] < 2:
             return self
-        turned = self.points.min(axis=0) + self.points.max(axis=0) - self.points
+        turned = np.where(axes, self.points.min(axis=0) + self.points.max(axis=0) - self.points, self.points)
         return _Frame(turned, cKDTree(turned), self.spacing)
 
 
@@ -250,7 +250,16 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     else:
         why = f"random motion: steps turn at random (median turning cosine {persistence:.2f} over {triplets} chains)"
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
-    coincidence = sum(int(np.count_nonzero(_links(a, b.half_turned())[0] >= 0)) for a, b in pairs) / real
+    # A few points can be nearly their own half turn; the mirror images then tell, since a set is
+    # rarely symmetric every way at once. Two points are their own half turn and, lying near an
+    # axis, their own mirror image: below three points a frame, chance goes unmeasured, and the
+    # minimum number of chains alone keeps the chance links of so sparse a scene from counting.
+    def chance(axes: tuple[bool, bool]) -> float:
+        return sum(int(np.count_nonzero(_links(a, b.reflected(axes))[0] >= 0)) for a, b in pairs) / real
+
+    coincidence = chance((True, True)) if mean_points >= 3 else 0.0
+    if coincidence > _MAX_COINCIDENCE:
+        coincidence = min(coincidence, chance((True, False)), chance((False, True)))
     if coincidence > _MAX_COINCIDENCE:
         return MotionChoice(
             "im2", None, persistence, triplets,
