@@ -53,6 +53,14 @@ def test_smooth_psmg_keeps_the_smooth_motion_model():
     assert choice.persistence > 0.9
 
 
+def test_a_frame_with_no_points_in_the_middle_is_measured_across():
+    points, _ = walkers(sigma=1.5)
+    points = list(points)
+    points[10] = np.empty((0, 2))
+    choice = choose_motion(points)
+    assert choice.individual_model == "im1" and choice.reason.startswith("random motion")
+
+
 def test_too_few_points_to_tell_keep_the_default():
     points, _ = walkers(count=5, frames=4)
     choice = choose_motion(points)

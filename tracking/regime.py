@@ -224,8 +224,9 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     else:
         why = f"random motion: steps turn at random (median turning cosine {persistence:.2f} over {triplets} chains)"
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
+    # A frame with no points has no centre and links nothing either way.
     coincidence = sum(
-        int(np.count_nonzero(unambiguous_links(a, b.min(axis=0) + b.max(axis=0) - b)[0] >= 0)) for a, b in pairs
+        int(np.count_nonzero(unambiguous_links(a, b.min(axis=0) + b.max(axis=0) - b)[0] >= 0)) for a, b in pairs if len(b)
     ) / real
     if coincidence > _MAX_COINCIDENCE:
         return MotionChoice(
