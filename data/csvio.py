@@ -90,7 +90,7 @@ def read_table(
     path = Path(path)
     if not path.is_file():
         raise DataError(path, "no such file")
-    with open(path, newline="") as handle:
+    with open(path, newline="", encoding="utf-8-sig") as handle:
         rows = list(csv.reader(handle))
     if not rows:
         raise DataError(path, "the file is empty (expected a header row)")
