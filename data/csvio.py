@@ -99,6 +99,9 @@ def read_table(
     if missing:
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")
     body = rows[1:]
+    # Editors and hand-written files often end with empty lines; they hold no row.
+    while body and not any(field.strip() for field in body[-1]):
+        body.pop()
     for line_number, row in enumerate(body, start=2):
         if len(row) != len(header):
             raise DataError(path, f"line {line_number} has {len(row)} fields, the header has {len(header)}")

@@ -124,6 +124,12 @@ def _one_line_exit_2(capsys, argv, message):
 GOOD_POINTS = "frame,x,y\n0,1,1\n1,2,1\n"
 
 
+def test_empty_lines_at_the_end_of_the_points_are_ignored(tmp_path):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS + "\n\n")
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "tracks.csv")]) == 0
+    assert read_table(tmp_path / "tracks.csv")["frame"].tolist() == [0, 1]
+
+
 @pytest.mark.parametrize(
     "text, message",
     [
