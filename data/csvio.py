@@ -84,7 +84,7 @@ def read_table(
     Raises
     ------
     DataError
-        If the file is missing, empty, lacks a required column, or holds text, NaN or
+        If the file is missing, empty, repeats a column name, lacks a required column, or holds text, NaN or
         infinity in a required column.
     """
     path = Path(path)
@@ -95,6 +95,9 @@ def read_table(
     if not rows:
         raise DataError(path, "the file is empty (expected a header row)")
     header = [name.strip() for name in rows[0]]
+    repeated = sorted({name for name in header if name and header.count(name) > 1})
+    if repeated:
+        raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")

@@ -139,6 +139,7 @@ def test_empty_lines_at_the_end_of_the_points_are_ignored(tmp_path):
         ("frame,x,y\n0,1,1\n1.5,2,1\n", "points.csv: line 3: column frame holds '1.5', not a whole number"),
         ("frame,x,y\n0,1,1\n-1,2,1\n", "points.csv: line 3: frame -1 is negative"),
         ("frame,x,y\n", "points.csv: no points (only a header)"),
+        ("frame,x,y,x\n0,1,1,5\n1,2,1,6\n", "points.csv: line 1: column(s) x appear more than once in the header"),
         ("", "points.csv: the file is empty"),
         ("frame,x,y\n4,1,1\n4,2,1\n", "points.csv: all points are in frame 4; tracking needs points in at least two frames"),
     ],
