@@ -182,6 +182,8 @@ def test_frames_are_drawn_alike_at_any_size():
     "make, out, message",
     [
         (lambda tmp, clip: _outside(tmp), "clip.mp4", "lie outside the video"),
+        (lambda tmp, clip: _outside(tmp), "last.png", "lie outside the video"),
+        (lambda tmp, clip: clip / "truth.csv", f"one.png --frame {FRAMES}", f"--frame {FRAMES} is past the last frame"),
         (lambda tmp, clip: _write(tmp / "odd.csv", "id,t,px,py\n1,0,3,4\n"), "clip.mp4", "track_id,frame,x,y"),
         (lambda tmp, clip: clip / "truth.csv", "missing/clip.mp4", "does not exist"),
         (lambda tmp, clip: clip / "truth.csv", "clip.avi", "unsupported output extension"),
