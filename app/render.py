@@ -304,6 +304,8 @@ def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
     wider, without anti-aliasing, so that it covers every pixel the other reaches) and how opaque
     (anti-aliased, so it alone carries the smooth edges).
     """
+    if not len(points):
+        return
     inks, opacity = _scratch(canvas.shape[:2])
     try:
         _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line)

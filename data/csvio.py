@@ -84,21 +84,27 @@ def read_table(
     Raises
     ------
     DataError
-        If the file is missing, empty, lacks a required column, or holds text, NaN or
+        If the file is missing, empty, repeats a column name, lacks a required column, or holds text, NaN or
         infinity in a required column.
     """
     path = Path(path)
     if not path.is_file():
         raise DataError(path, "no such file")
-    with open(path, newline="") as handle:
+    with open(path, newline="", encoding="utf-8-sig") as handle:
         rows = list(csv.reader(handle))
     if not rows:
         raise DataError(path, "the file is empty (expected a header row)")
     header = [name.strip() for name in rows[0]]
+    repeated = sorted({name for name in header if name and header.count(name) > 1})
+    if repeated:
+        raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")
     body = rows[1:]
+    # Editors and hand-written files often end with empty lines; they hold no row.
+    while body and not any(field.strip() for field in body[-1]):
+        body.pop()
     for line_number, row in enumerate(body, start=2):
         if len(row) != len(header):
             raise DataError(path, f"line {line_number} has {len(row)} fields, the header has {len(header)}")

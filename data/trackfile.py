@@ -111,7 +111,7 @@ def _sniff(path: Path) -> str:
         raise DataError(path, "no such file")
     suffix = path.suffix.lower()
     if suffix == ".csv":
-        with open(path, newline="") as handle:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
             header = {name.strip() for name in next(csv.reader(handle), [])}
         if {"track_id", "frame", "x", "y"} <= header:
             return "csv"

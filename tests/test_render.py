@@ -88,6 +88,14 @@ def test_png_is_byte_identical_on_two_runs_and_matches_the_folder_frame(clip, tm
     assert (tmp_path / "frames" / "frame_000005.png").read_bytes() == (tmp_path / "a.png").read_bytes()
 
 
+def test_a_frame_whose_trail_holds_no_link_is_drawn(clip, tmp_path, capsys):
+    # Nothing is tracked in frames 2 to 4: their trails of one frame hold no link to draw.
+    tracks = _write(tmp_path / "gap.csv", "track_id,frame,x,y\n1,0,10,10\n1,1,12,10\n2,5,50,50\n2,6,52,50\n")
+    status, err = render(capsys, clip / "clip.mp4", tracks, "--out", tmp_path / "gap.png", "--frame", 4, "--trail", 1)
+    assert status == 0, err
+    assert (tmp_path / "gap.png").is_file()
+
+
 def test_interpolated_head_is_a_hollow_ring(clip, tmp_path, capsys):
     truth = read_tracks(clip / "truth.csv")
     hidden_rows, hidden_columns = np.nonzero(truth.interpolated)
@@ -182,6 +190,8 @@ def test_frames_are_drawn_alike_at_any_size():
     "make, out, message",
     [
         (lambda tmp, clip: _outside(tmp), "clip.mp4", "lie outside the video"),
+        (lambda tmp, clip: _outside(tmp), "last.png", "lie outside the video"),
+        (lambda tmp, clip: clip / "truth.csv", f"one.png --frame {FRAMES}", f"--frame {FRAMES} is past the last frame"),
         (lambda tmp, clip: _write(tmp / "odd.csv", "id,t,px,py\n1,0,3,4\n"), "clip.mp4", "track_id,frame,x,y"),
         (lambda tmp, clip: clip / "truth.csv", "missing/clip.mp4", "does not exist"),
         (lambda tmp, clip: clip / "truth.csv", "clip.avi", "unsupported output extension"),

@@ -140,6 +140,12 @@ def _one_line_exit_2(capsys, argv, message):
 GOOD_POINTS = "frame,x,y\n0,1,1\n1,2,1\n"
 
 
+def test_empty_lines_at_the_end_of_the_points_are_ignored(tmp_path):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS + "\n\n")
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "tracks.csv")]) == 0
+    assert read_table(tmp_path / "tracks.csv")["frame"].tolist() == [0, 1]
+
+
 @pytest.mark.parametrize(
     "text, message",
     [
@@ -149,6 +155,7 @@ GOOD_POINTS = "frame,x,y\n0,1,1\n1,2,1\n"
         ("frame,x,y\n0,1,1\n1.5,2,1\n", "points.csv: line 3: column frame holds '1.5', not a whole number"),
         ("frame,x,y\n0,1,1\n-1,2,1\n", "points.csv: line 3: frame -1 is negative"),
         ("frame,x,y\n", "points.csv: no points (only a header)"),
+        ("frame,x,y,x\n0,1,1,5\n1,2,1,6\n", "points.csv: line 1: column(s) x appear more than once in the header"),
         ("", "points.csv: the file is empty"),
         ("frame,x,y\n4,1,1\n4,2,1\n", "points.csv: all points are in frame 4; tracking needs points in at least two frames"),
     ],

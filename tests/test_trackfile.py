@@ -65,6 +65,15 @@ def test_trackpy_table_with_extra_columns_is_recognised(tmp_path):
     np.testing.assert_array_equal(tracks.xy[1], [[10.0, 20.0], [11.5, 21.0]])
 
 
+@pytest.mark.parametrize("header", ["track_id,frame,x,y", "particle,frame,x,y"])
+def test_csv_saved_with_a_byte_order_mark_is_read(tmp_path, header):
+    # Spreadsheet programs save "CSV UTF-8" with a byte order mark before the header.
+    (tmp_path / "t.csv").write_text(header + "\n7,0,10.0,20.0\n7,1,11.5,21.0\n", encoding="utf-8-sig")
+    tracks = read_tracks(tmp_path / "t.csv")
+    assert list(tracks.track_ids) == [7]
+    np.testing.assert_array_equal(tracks.xy[0], [[10.0, 20.0], [11.5, 21.0]])
+
+
 def test_mot_frames_count_from_one_and_points_are_box_centres(tmp_path):
     (tmp_path / "gt.txt").write_text("1,4,10,20,6,8,1,-1,-1,-1\n2,4,12,20,6,8,1,-1,-1,-1\n2 5 100 50 0 0 0.5 -1 -1 -1\n")
     tracks = read_tracks(tmp_path / "gt.txt")

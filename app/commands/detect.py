@@ -146,6 +146,8 @@ def _roi(text: str) -> str | Circle | Path:
         if not all(np.isfinite((x, y, r))) or r <= 0:
             raise UsageError(f"--roi circle needs finite X,Y and a radius > 0, got {text!r}")
         return Circle(x, y, r)
+    if not Path(text).is_file():
+        raise UsageError(f"--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; {text!r} is none of these")
     return Path(text)
 
 

@@ -101,6 +101,13 @@ def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tupl
     last_frames = [tracks.first_frame + tracks.n_frames - 1 for _, tracks in track_sets]
     if kind == "png":
         frame = args.frame if args.frame is not None else max(last_frames)
+        with open_frames(args.input) as whole:
+            length = whole.clip_length
+        if length is not None and frame >= length:
+            if args.frame is not None:
+                raise UsageError(f"--frame {frame} is past the last frame of {args.input} ({length - 1})")
+            # The tracks' last frame is past the clip: the check below says so in those terms.
+            frame = length - 1
         source = open_frames(args.input, start=frame, end=frame + 1)
     else:
         source = open_frames(args.input, start=args.start, end=args.end, step=args.step)
