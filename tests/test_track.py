@@ -56,6 +56,23 @@ def test_track_then_evaluate_finds_every_trajectory(scene, tmp_path):
     assert "track_error      0.000000" in score.stdout and "link_error       0.000000" in score.stdout
 
 
+@pytest.mark.parametrize("step", [2, 10])
+def test_frames_numbered_every_nth_are_tracked_as_consecutive(scene, tmp_path, capsys, step):
+    # What `run --step N` writes: frames 7, 7 + N, 7 + 2N, ...; each one a measurement, not a
+    # frame with every point between them missed.
+    folder, columns = scene
+    spaced = dict(columns, frame=FIRST_FRAME + (columns["frame"] - FIRST_FRAME) * step)
+    write_table(tmp_path / "points.csv", spaced)
+    truth = read_table(folder / "truth.csv")
+    write_table(tmp_path / "truth.csv", dict(truth, frame=FIRST_FRAME + (truth["frame"] - FIRST_FRAME) * step))
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "tracks.csv")]) == 0
+    assert f"10 frames ({step} frame numbers apart, tracked as consecutive)" in capsys.readouterr().out
+    tracks = read_table(tmp_path / "tracks.csv")
+    assert set(tracks["frame"]) <= set(spaced["frame"])
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 0
+    assert "link_error       0.000000" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("algorithm", ["goa", *TRACKERS])
 def test_every_algorithm_writes_tracks_of_the_input_points(scene, tmp_path, algorithm):
     folder, columns = scene

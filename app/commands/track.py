@@ -45,7 +45,8 @@ track_id or interpolated are not kept.
 
 Frame numbers are the input's. A frame number missing between the first and the last is a frame in
 which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
-rows. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
+rows; but frame numbers all N apart (0, 2, 4, ... as run --step 2 writes them) are consecutive
+measurements, and speeds are then per N frames. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
 
 Algorithms: goa-updown (default) tracks forwards, then backwards in time, and lets tracks come and
 go: at each frame the running tracks take their points first (GOA's optimal assignment, with slaves
@@ -128,9 +129,12 @@ class Points:
     Attributes
     ----------
     frames : list of ndarray, each (M_k, 2)
-        Positions (x, y), pixels, of frame ``first_frame + k``, sorted by x then y.
+        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
     first_frame : int
         0-based frame index of ``frames[0]``.
+    frame_step : int
+        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
+        of N apart (every Nth frame measured, as ``run --step N`` writes them).
     order : ndarray of int
         0-based data row of POINTS.csv of each point, frame after frame.
     offset : ndarray of int
@@ -141,6 +145,7 @@ class Points:
 
     frames: list[np.ndarray]
     first_frame: int
+    frame_step: int
     order: np.ndarray
     offset: np.ndarray
     kept: dict[str, np.ndarray]
@@ -161,16 +166,20 @@ def read_points(path: Path) -> Points:
     if frame.min() < 0:
         bad = int(np.argmax(frame < 0))
         raise DataError(path, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
-    if np.unique(frame).size < 2:
+    present = np.unique(frame)
+    if present.size < 2:
         raise DataError(path, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
+    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
+    # other frame missed (which no track would survive).
+    step = int(np.gcd.reduce(np.diff(present)))
     # Sorting by position makes the result independent of the order of the rows.
     order = np.lexsort((y, x, frame))
-    first = int(frame.min())
-    offset = np.concatenate(([0], np.cumsum(np.bincount(frame - first))))
+    first = int(present[0])
+    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step))))
     xy = np.column_stack((x, y))[order]
     frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
     kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
-    return Points(frames, first, order, offset[:-1], kept)
+    return Points(frames, first, step, order, offset[:-1], kept)
 
 
 def goa_config(args: argparse.Namespace) -> GOAConfig:
@@ -234,6 +243,7 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
     rows = tracks.to_rows()
     measurement = tracks.measurement[tracks.present]  # same row order as to_rows
     column = rows["frame"] - tracks.first_frame
+    rows["frame"] = tracks.first_frame + column * points.frame_step
     measured = measurement >= 0
     source = points.order[points.offset[column[measured]] + measurement[measured]]
     for name, values in points.kept.items():
@@ -250,8 +260,9 @@ def run(args: argparse.Namespace) -> int:
     tracks = track_points(points, args)
     rows = track_rows(points, tracks)
     write_table(args.out, rows)
+    spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
     print(
-        f"{len(points.frames)} frames, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "
+        f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "
         f"{counted(tracks.n_tracks, 'track')}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}"
     )
     return 0
