@@ -98,7 +98,7 @@ def test_fit_motion_keeps_what_the_user_set():
     assert fitted.d_max == choice.speed_limit and drift == choice.drift
     assert drift == pytest.approx((1.0, 0.5), abs=0.2)
     mine, kept_drift = fit_motion(GOAConfig(individual=IndividualModel("im3"), d_max=9.0), choice, keep_model=True)
-    assert mine.individual.name == "im3" and mine.d_max == 9.0 and kept_drift == (0.0, 0.0)
+    assert mine.individual.name == "im3" and mine.d_max == 9.0 and kept_drift == choice.drift
     assert fit_motion(GOAConfig(), choose_motion(walking, "smooth")) == (GOAConfig(), (0.0, 0.0))
 
 
@@ -145,12 +145,14 @@ def test_track_with_default_options_follows_random_walkers(tmp_path, capsys):
     assert scores["auto"].link_error < 0.02 < 0.3 < scores["smooth"].link_error
 
 
-def test_track_follows_drifting_walkers_in_the_frame_of_their_drift(tmp_path, capsys):
+@pytest.mark.parametrize("options", [[], ["--max-speed", "9"]])
+def test_track_follows_drifting_walkers_in_the_frame_of_their_drift(tmp_path, capsys, options):
     # Steps of 3 px/frame to the right plus 1 px of noise: about the drift the walkers are easy to
     # tell apart; tracked where they stand, each one's 5 sigma disc holds its neighbours' points.
+    # A limit the user gives (here 3 px of drift + 6 sigma) bounds the steps about the drift too.
     points, truth = walkers(count=200, sigma=1.0, drift=(3.0, 0.0), frames=15)
     _write_points(tmp_path / "points.csv", points)
-    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv")]) == 0
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv"), *options]) == 0
     drift = re.search(r"tracking with IM1, .* about the drift \((\S+), (\S+)\) px/frame", capsys.readouterr().out)
     assert drift and float(drift[1]) == pytest.approx(3.0, abs=0.2) and float(drift[2]) == pytest.approx(0.0, abs=0.2)
     scores = score_tracks(read_tracks(tmp_path / "t.csv"), truth)

@@ -287,10 +287,11 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     """The tracker configuration for the motion chosen, keeping what the user set.
 
     Random motion takes IM1 on squared distances (unless ``keep_model``) and nearest-neighbour
-    first links. Without a speed limit in ``config`` it also takes the estimated one, and the
-    drift is to be removed from the positions before tracking (:func:`track_without_drift`), so
-    that the limit is 5 sigma of the noise alone and a track bridging a gap of g frames is
-    looked for g drift steps downstream. Smooth motion leaves ``config`` as is.
+    first links, and the drift is to be removed from the positions before tracking
+    (:func:`track_without_drift`), so that a track bridging a gap of g frames is looked for g
+    drift steps downstream. Without a speed limit in ``config`` it also takes the estimated one,
+    5 sigma of the noise about the drift; a limit in ``config`` bounds the steps about the drift
+    too. Smooth motion leaves ``config`` as is.
 
     Returns
     -------
@@ -303,11 +304,9 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     changes: dict = {"initialisation": "im1"}
     if not keep_model:
         changes["individual"] = IndividualModel("im1", power=2)
-    drift = (0.0, 0.0)
     if config.d_max is None and choice.speed_limit is not None:
         changes["d_max"] = choice.speed_limit
-        drift = choice.drift
-    return replace(config, **changes), drift
+    return replace(config, **changes), choice.drift
 
 
 def track_without_drift(
