@@ -73,6 +73,18 @@ def test_frames_numbered_every_nth_are_tracked_as_consecutive(scene, tmp_path, c
     assert "link_error       0.000000" in capsys.readouterr().out
 
 
+def test_evaluate_hints_at_truth_numbered_one_frame_off(scene, tmp_path, capsys):
+    folder, _ = scene
+    truth = read_table(folder / "truth.csv")
+    write_table(tmp_path / "truth.csv", dict(truth, frame=truth["frame"] + 1))
+    main(["track", str(folder / "points.csv"), "--out", str(tmp_path / "tracks.csv")])
+    capsys.readouterr()
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 0
+    assert "shifted by -1" in capsys.readouterr().err
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(folder / "truth.csv")]) == 0
+    assert "hint" not in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("algorithm", ["goa", *TRACKERS])
 def test_every_algorithm_writes_tracks_of_the_input_points(scene, tmp_path, algorithm):
     folder, columns = scene

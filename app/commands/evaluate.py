@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
+from dataclasses import replace
 from pathlib import Path
 
 from data.atomic import atomic_path, output_folder
@@ -14,11 +16,14 @@ from data.trackfile import FORMATS, read_tracks
 from tracking.clear_mot import clear_mot
 from tracking.diagnosis import first_errors
 from tracking.metrics import score_tracks
+from tracking.tracks import Tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
 
 DEFAULT_TOLERANCE = 3.0
+# A result matching fewer true points than this is checked against the truth one frame off.
+_WELL_MATCHED = 0.9
 
 
 def add_parser(subparsers) -> None:
@@ -53,6 +58,9 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
         With the per-frame counts.
     wrong : dict of str to ndarray
         :func:`tracking.diagnosis.first_errors` of the result.
+    hint : str or None
+        When most true points match nothing but would with the truth's frame numbers one off,
+        a line that says so (truth numbered from 1 against tracks from 0 is a common slip).
     """
     result = read_tracks(tracks_path, tracks_format)
     truth = read_tracks(truth_path, truth_format)
@@ -87,7 +95,22 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
         "idp": clear.idp,
         "idr": clear.idr,
     }
-    return measures, clear, first_errors(result, truth, tolerance)
+    return measures, clear, first_errors(result, truth, tolerance), _offset_hint(result, truth, tolerance, clear, truth_path)
+
+
+def _offset_hint(result: Tracks, truth: Tracks, tolerance: float, clear, truth_path: Path) -> str | None:
+    matched = (clear.num_objects - clear.num_misses) / max(clear.num_objects, 1)
+    if matched >= _WELL_MATCHED:
+        return None
+    for shift in (-1, 1):
+        moved = clear_mot(result, replace(truth, first_frame=truth.first_frame + shift), tolerance)
+        share = (moved.num_objects - moved.num_misses) / max(moved.num_objects, 1)
+        if share >= max(_WELL_MATCHED, matched + 0.2):
+            return (
+                f"hint: {share:.0%} of the true points match with {truth_path}'s frame numbers shifted by {shift:+d} "
+                f"(against {matched:.0%} as given); are both files' frames 0-based?"
+            )
+    return None
 
 
 def format_table(measures: dict) -> str:
@@ -103,8 +126,10 @@ def format_table(measures: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     if not (args.tol > 0 and math.isfinite(args.tol)):
         raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
-    measures, clear, wrong = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
+    measures, clear, wrong, hint = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
     print(format_table(measures))
+    if hint is not None:
+        print(hint, file=sys.stderr)
     if args.out is not None:
         with output_folder(args.out), atomic_path(args.out / "evaluation.json") as temporary:
             # JSON has no NaN: a measure undefined for empty input is written as null.
