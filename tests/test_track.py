@@ -252,3 +252,11 @@ def test_evaluate_scores_a_single_frame_result(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 0
     table = capsys.readouterr().out
     assert "track_error      1.000000" in table and "link_error       1.000000" in table
+
+
+def test_track_output_ending_in_a_slash_is_refused(tmp_path, capsys):
+    (tmp_path / "points.csv").write_text(GOOD_POINTS)
+    with pytest.raises(SystemExit) as exit_:
+        main(["track", str(tmp_path / "points.csv"), "--out", f"{tmp_path}/result/"])
+    assert exit_.value.code == 2 and "names a folder; give a file name" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]

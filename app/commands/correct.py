@@ -8,6 +8,7 @@ from pathlib import Path
 from data.corrections import apply_corrections, read_corrections
 from data.trackfile import FORMATS, read_tracks, write_tracks
 
+from ..errors import output_file
 from ..wording import counted
 
 
@@ -21,7 +22,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to correct (any track format)")
     parser.add_argument("edits", type=Path, metavar="EDITS", help="corrections file")
-    parser.add_argument("--out", type=Path, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt or .xml)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt or .xml)")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--out-format", choices=sorted(FORMATS), default=None, help="format of the output (default: from its extension)")
     parser.set_defaults(run=run)

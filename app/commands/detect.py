@@ -20,7 +20,7 @@ from data.frames import IMAGE_SUFFIXES
 from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from detection.roi import Circle
 
-from ..errors import UsageError, option_name
+from ..errors import UsageError, option_name, output_file
 from ..render import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
@@ -189,8 +189,8 @@ def add_parser(subparsers) -> None:
         "--preview draws what was found and the region of interest on one frame.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder, glob pattern or TIFF stack")
-    parser.add_argument("--out", type=Path, required=True, metavar="detections.csv", help="output CSV")
-    parser.add_argument("--preview", type=Path, default=None, metavar="PNG", help="write a preview image of one frame")
+    parser.add_argument("--out", type=output_file, required=True, metavar="detections.csv", help="output CSV")
+    parser.add_argument("--preview", type=output_file, default=None, metavar="PNG", help="write a preview image of one frame")
     parser.add_argument("--preview-frame", type=int, default=None, metavar="F", help="0-based frame of the preview (default: the first processed)")
     add_detection_options(parser)
     parser.set_defaults(run=run)

@@ -17,7 +17,7 @@ from tracking.motion import CombinedModel, IndividualModel
 from tracking.trackers import TRACKERS, run_tracker
 from tracking.tracks import Tracks
 
-from ..errors import UsageError, option_name
+from ..errors import UsageError, option_name, output_file
 from ..pipeline import link_frames, track_with_motion
 from ..progress import progress_bar
 from ..wording import counted
@@ -86,7 +86,7 @@ def add_parser(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
-    parser.add_argument("--out", type=Path, required=True, metavar="TRACKS.csv", help="output tracks (CSV)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks (CSV)")
     parser.add_argument(
         "--algorithm",
         choices=("goa", *TRACKERS),
