@@ -145,7 +145,9 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
         last = settings.start + settings.step * source.frame_count if source.frame_count is not None else settings.end
         processed = range(settings.start, last if last is not None else sys.maxsize, settings.step)
         if preview_frame is not None and preview_frame not in processed:
-            raise UsageError(f"preview frame {preview_frame} is not among the frames processed")
+            step = f" every {settings.step}" if settings.step > 1 else ""
+            span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
+            raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         roi, circle = _given_roi(settings.roi, source.size)
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
         detect = DETECTORS[settings.detector]
