@@ -28,6 +28,7 @@ import numpy as np
 
 from tracking.tracks import Tracks
 
+from .csvio import text_lines
 from .errors import DataError
 
 # verb -> (argument kinds, number of optional trailing arguments)
@@ -70,11 +71,10 @@ def read_corrections(path) -> list[Edit]:
     if not path.is_file():
         raise DataError(path, "no such file")
     edits = []
-    with open(path) as handle:
-        for number, text in enumerate(handle, start=1):
-            words = text.split("#", 1)[0].split()
-            if words:
-                edits.append(_parse(f"{path}:{number}", words, number))
+    for number, text in text_lines(path):
+        words = text.split("#", 1)[0].split()
+        if words:
+            edits.append(_parse(f"{path}:{number}", words, number))
     return edits
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import os
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -49,10 +50,25 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
         raise ValueError(f"columns differ in length: {sorted(lengths)}")
     formatted = [_format_column(np.asarray(columns[name])) for name in names]
     with atomic_path(path) as temporary:
-        with open(temporary, "w", newline="") as handle:
+        with open(temporary, "w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle, lineterminator="\n")
             writer.writerow(names)
             writer.writerows(zip(*formatted))
+
+
+def text_lines(path: Path) -> Iterator[tuple[int, str]]:
+    """``(line number from 1, line)`` of a UTF-8 text file (a byte-order mark is skipped).
+
+    Raises
+    ------
+    DataError
+        If the file is not UTF-8 text.
+    """
+    with open(path, encoding="utf-8-sig") as handle:
+        try:
+            yield from enumerate(handle, start=1)
+        except UnicodeDecodeError as error:
+            raise DataError.not_utf8(path, error) from None
 
 
 def read_table(
@@ -91,7 +107,10 @@ def read_table(
     if not path.is_file():
         raise DataError(path, "no such file")
     with open(path, newline="", encoding="utf-8-sig") as handle:
-        rows = list(csv.reader(handle))
+        try:
+            rows = list(csv.reader(handle))
+        except UnicodeDecodeError as error:
+            raise DataError.not_utf8(path, error) from None
     if not rows:
         raise DataError(path, "the file is empty (expected a header row)")
     header = [name.strip() for name in rows[0]]

@@ -8,3 +8,8 @@ class DataError(Exception):
         super().__init__(f"{path}: {problem}")
         self.path = path
         self.problem = problem
+
+    @classmethod
+    def not_utf8(cls, path, error: UnicodeDecodeError) -> "DataError":
+        """The error for a text file in another encoding (Excel's plain "CSV" is cp1252)."""
+        return cls(path, f"is not UTF-8 text (byte {error.start} of the file); save it as UTF-8 ('CSV UTF-8' in Excel)")

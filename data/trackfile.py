@@ -112,7 +112,10 @@ def _sniff(path: Path) -> str:
     suffix = path.suffix.lower()
     if suffix == ".csv":
         with open(path, newline="", encoding="utf-8-sig") as handle:
-            header = {name.strip() for name in next(csv.reader(handle), [])}
+            try:
+                header = {name.strip() for name in next(csv.reader(handle), [])}
+            except UnicodeDecodeError as error:
+                raise DataError.not_utf8(path, error) from None
         if {"track_id", "frame", "x", "y"} <= header:
             return "csv"
         if {"particle", "frame", "x", "y"} <= header:

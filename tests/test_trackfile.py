@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from data.corrections import read_corrections
 from data.errors import DataError
 from data.trackfile import read_tracks, write_tracks
 from tracking.tracks import Tracks
@@ -161,3 +162,19 @@ def test_trackmate_branching_track_is_rejected(tmp_path):
 def test_unknown_format_name(tmp_path):
     with pytest.raises(DataError, match="unknown track format"):
         write_tracks(tmp_path / "t.csv", _tracks(), format="excel")
+
+
+@pytest.mark.parametrize("name", ["tracks.csv", "tracks.txt"])
+def test_a_file_in_another_encoding_is_a_one_line_error(tmp_path, name):
+    # Excel's plain "CSV" is cp1252: the é of a label is byte 0xe9, not UTF-8.
+    path = tmp_path / name
+    path.write_bytes("track_id,frame,x,y,label\n0,0,1,1,café\n".encode("cp1252") if name.endswith(".csv") else b"1,1,\xe9,0,0,2,2\n")
+    with pytest.raises(DataError, match="is not UTF-8 text"):
+        read_tracks(path)
+
+
+def test_a_corrections_file_in_another_encoding_is_a_one_line_error(tmp_path):
+    path = tmp_path / "edits.txt"
+    path.write_bytes("delete 1  # café\n".encode("cp1252"))
+    with pytest.raises(DataError, match="edits.txt: is not UTF-8 text"):
+        read_corrections(path)

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
+from ..csvio import text_lines
 from ..errors import DataError
 from .rows import Rows
 
@@ -31,22 +32,21 @@ def read(path) -> Rows:
     if not path.is_file():
         raise DataError(path, "no such file")
     values, lines = [], []
-    with open(path) as handle:
-        for number, text in enumerate(handle, start=1):
-            text = text.strip()
-            if not text or text.startswith("#"):
-                continue
-            fields = _SEPARATOR.split(text.strip(", \t"))
-            if len(fields) < _FIELDS:
-                raise DataError(path, f"line {number}: {len(fields)} fields; MOTChallenge needs at least frame,id,bb_left,bb_top,bb_width,bb_height")
-            try:
-                numbers = [float(field) for field in fields[:_FIELDS]]
-            except ValueError:
-                raise DataError(path, f"line {number}: a field of frame,id,bb_left,bb_top,bb_width,bb_height is not a number") from None
-            if numbers[0] != round(numbers[0]) or numbers[1] != round(numbers[1]):
-                raise DataError(path, f"line {number}: frame and id must be whole numbers")
-            values.append(numbers)
-            lines.append(number)
+    for number, text in text_lines(path):
+        text = text.strip()
+        if not text or text.startswith("#"):
+            continue
+        fields = _SEPARATOR.split(text.strip(", \t"))
+        if len(fields) < _FIELDS:
+            raise DataError(path, f"line {number}: {len(fields)} fields; MOTChallenge needs at least frame,id,bb_left,bb_top,bb_width,bb_height")
+        try:
+            numbers = [float(field) for field in fields[:_FIELDS]]
+        except ValueError:
+            raise DataError(path, f"line {number}: a field of frame,id,bb_left,bb_top,bb_width,bb_height is not a number") from None
+        if numbers[0] != round(numbers[0]) or numbers[1] != round(numbers[1]):
+            raise DataError(path, f"line {number}: frame and id must be whole numbers")
+        values.append(numbers)
+        lines.append(number)
     table = np.array(values, dtype=float).reshape(-1, _FIELDS)
     frame = table[:, 0].astype(np.int64)
     early = np.flatnonzero(frame < 1)
