@@ -45,8 +45,9 @@ track_id or interpolated are not kept.
 
 Frame numbers are the input's. A frame number missing between the first and the last is a frame in
 which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
-rows; but frame numbers all N apart (0, 2, 4, ... as run --step 2 writes them) are consecutive
-measurements, and speeds are then per N frames. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
+rows; but frame numbers all N apart (0, 2, 4, ... as run --step 2 writes them, or any two frames)
+are consecutive measurements, as in run --step N: speeds are then per N frames, and --max-gap and
+--min-length count measured frames. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
 
 Algorithms: goa-updown (default) tracks forwards, then backwards in time, and lets tracks come and
 go: at each frame the running tracks take their points first (GOA's optimal assignment, with slaves
