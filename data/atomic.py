@@ -80,7 +80,8 @@ def output_folder(folder: str | os.PathLike) -> Iterator[Path]:
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise DataError(folder, "exists and is not a folder")
-    missing = [path for path in (folder, *folder.parents) if not path.exists()]
+    # x/.. names no folder of its own to remove: x is the one made.
+    missing = [path for path in (folder, *folder.parents) if not path.exists() and path.name not in ("", ".", "..")]
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:

@@ -29,3 +29,11 @@ def test_a_file_in_the_way_is_a_data_error(tmp_path):
     with pytest.raises(DataError, match="exists and is not a folder"):
         with output_folder(tmp_path / "taken"):
             pass
+
+
+def test_a_failure_removes_the_folder_a_dotted_path_made(tmp_path):
+    # x/.. is the parent itself, but making it makes x.
+    with pytest.raises(RuntimeError):
+        with output_folder(tmp_path / "x" / ".."):
+            raise RuntimeError("bad input")
+    assert not (tmp_path / "x").exists()

@@ -72,7 +72,7 @@ class MotionChoice:
         GOA individual model: "im2" smooth motion, "im1" nearest neighbour.
     speed_limit : float or None
         Speed limit, pixels/frame (GOA's d_max), about the drift: 5 sigma of the per-axis step
-        noise (at least 1); None for no limit (with "im2").
+        noise (at least 1); None for no limit ("im2", or "im1" asked for with no step to measure).
     persistence : float
         Median cosine of the turning angle between consecutive unambiguous steps (1 straight
         on, 0 random walk, negative for jitter about a fixed position); NaN when there were
@@ -93,27 +93,6 @@ class MotionChoice:
     drift: tuple[float, float] = (0.0, 0.0)
 
 
-def unambiguous_links(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Links between two consecutive frames that no plausible motion could make wrong.
-
-    Parameters
-    ----------
-    a, b : ndarray, shape (M_a, 2) and (M_b, 2)
-        Positions (x, y) in frames k and k + 1, pixels.
-
-    Returns
-    -------
-    link : ndarray of int, shape (M_a,)
-        For each point of ``a`` the index of its point in ``b``, or -1: the two are mutual
-        nearest neighbours and closer than 0.4 times the nearest other point of either frame
-        to each of them.
-    reach : ndarray of float, shape (M_a,)
-        The longest step that would have been kept for each linked point (0.4 times that
-        spacing), pixels; NaN where unlinked. Needed to undo the bias against long steps.
-    """
-    return _links(_Frame.of(a), _Frame.of(b))
-
-
 class _Frame(NamedTuple):
     """One frame's positions with the search tree and spacing every link test needs."""
 
@@ -128,10 +107,11 @@ class _Frame(NamedTuple):
         return cls(points, tree, tree.query(points, k=2)[0][:, 1])
 
     def reflected(self, axes: tuple[bool, bool]) -> "_Frame":
-        """The frame mirrored about the centre of its bounding box along x, y or both (a half turn).
+        """The frame mirrored about the centre of its bounding box along the axes chosen (x, y);
+        both axes make a half turn.
 
         A reflection keeps every distance, so the spacing is kept rather than measured again.
-        A frame of under two points has no centre to speak of (and links nothing).
+        A frame of under two points links nothing, turned or not, and is left as it is.
         """
         if self.points.shape[0] < 2:
             return self
@@ -140,7 +120,23 @@ class _Frame(NamedTuple):
 
 
 def _links(a: _Frame, b: _Frame) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`unambiguous_links` on frames whose trees and spacings are built once."""
+    """Links between two consecutive frames that no plausible motion could make wrong.
+
+    Parameters
+    ----------
+    a, b : _Frame
+        Frames k and k + 1 (positions (x, y) in pixels, with their trees and spacings).
+
+    Returns
+    -------
+    link : ndarray of int, shape (M_a,)
+        For each point of ``a`` the index of its point in ``b``, or -1: the two are mutual
+        nearest neighbours and closer than 0.4 times the nearest other point of either frame
+        to each of them.
+    reach : ndarray of float, shape (M_a,)
+        The longest step that would have been kept for each linked point (0.4 times that
+        spacing), pixels; NaN where unlinked. Needed to undo the bias against long steps.
+    """
     link = np.full(a.points.shape[0], -1, dtype=np.int64)
     reach = np.full(a.points.shape[0], np.nan)
     if a.points.shape[0] < 2 or b.points.shape[0] < 2:
@@ -163,7 +159,7 @@ def unambiguous_triplets(frames: Sequence[np.ndarray], links: Sequence[np.ndarra
     frames : sequence of ndarray, each (M_k, 2)
         Positions (x, y) per frame, pixels.
     links : sequence of ndarray
-        :func:`unambiguous_links` of each pair of consecutive frames.
+        The unambiguous links (:func:`_links`) of each pair of consecutive frames.
 
     Returns
     -------
@@ -252,8 +248,9 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
     # A few points can be nearly their own half turn; the mirror images then tell, since a set is
     # rarely symmetric every way at once. Two points are their own half turn and, lying near an
-    # axis, their own mirror image: below three points a frame, chance goes unmeasured, and the
-    # minimum number of chains alone keeps the chance links of so sparse a scene from counting.
+    # axis, their own mirror image: below three points a frame on average, chance goes unmeasured,
+    # and the minimum number of chains alone keeps the chance links of so sparse a scene from
+    # counting.
     def chance(axes: tuple[bool, bool]) -> float:
         return sum(int(np.count_nonzero(_links(a, b.reflected(axes))[0] >= 0)) for a, b in pairs) / real
 

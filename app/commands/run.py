@@ -24,7 +24,8 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         metavar="PX",
-        help="largest speed in pixels/frame (d_max); default: no limit, the motion model decides",
+        help="largest speed in pixels/frame (d_max); with random motion, about the measured drift; default: no limit "
+        "for smooth motion, one estimated from the data for random motion",
     )
     group.add_argument(
         "--motion",
