@@ -10,7 +10,6 @@ picture reads at 640x480 and at 4K.
 from __future__ import annotations
 
 import functools
-
 from dataclasses import dataclass
 from typing import Iterable, Iterator, Sequence
 

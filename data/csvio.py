@@ -57,14 +57,15 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
 
 
 def text_lines(path: Path) -> Iterator[tuple[int, str]]:
-    """``(line number from 1, line)`` of a UTF-8 text file (a byte-order mark is skipped).
+    """``(line number from 1, line)`` of a UTF-8 text file (a byte-order mark is skipped; line
+    endings are kept as written, as the csv module wants them).
 
     Raises
     ------
     DataError
         If the file is not UTF-8 text.
     """
-    with open(path, encoding="utf-8-sig") as handle:
+    with open(path, newline="", encoding="utf-8-sig") as handle:
         try:
             yield from enumerate(handle, start=1)
         except UnicodeDecodeError as error:
@@ -106,11 +107,7 @@ def read_table(
     path = Path(path)
     if not path.is_file():
         raise DataError(path, "no such file")
-    with open(path, newline="", encoding="utf-8-sig") as handle:
-        try:
-            rows = list(csv.reader(handle))
-        except UnicodeDecodeError as error:
-            raise DataError.not_utf8(path, error) from None
+    rows = list(csv.reader(line for _, line in text_lines(path)))
     if not rows:
         raise DataError(path, "the file is empty (expected a header row)")
     header = [name.strip() for name in rows[0]]

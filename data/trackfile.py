@@ -24,6 +24,7 @@ import numpy as np
 
 from tracking.tracks import Tracks
 
+from .csvio import text_lines
 from .errors import DataError
 from .formats import isbi, mot, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
@@ -111,11 +112,9 @@ def _sniff(path: Path) -> str:
         raise DataError(path, "no such file")
     suffix = path.suffix.lower()
     if suffix == ".csv":
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            try:
-                header = {name.strip() for name in next(csv.reader(handle), [])}
-            except UnicodeDecodeError as error:
-                raise DataError.not_utf8(path, error) from None
+        lines = text_lines(path)
+        header = {name.strip() for name in next(csv.reader(line for _, line in lines), [])}
+        lines.close()
         if {"track_id", "frame", "x", "y"} <= header:
             return "csv"
         if {"particle", "frame", "x", "y"} <= header:

@@ -47,7 +47,8 @@ Frame numbers are the input's. A frame number missing between the first and the 
 which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
 rows; but frame numbers all N apart (0, 2, 4, ... as run --step 2 writes them, or any two frames)
 are consecutive measurements, as in run --step N: speeds are then per N frames, and --max-gap and
---min-length count measured frames. Points are sorted by (frame, x, y) before tracking, so the order of the rows does not matter.
+--min-length count measured frames. Points are sorted by (frame, x, y) before tracking, so the order
+of the rows does not matter.
 
 Algorithms: goa-updown (default) tracks forwards, then backwards in time, and lets tracks come and
 go: at each frame the running tracks take their points first (GOA's optimal assignment, with slaves
@@ -64,16 +65,17 @@ comparison trackers; they start and end tracks anywhere and take only --max-spee
 applies to every algorithm.
 
 The GOA family first measures how the points move (--motion auto, the default; the first line of
-output says what it found): from the links no motion could make wrong (mutual nearest neighbours much
-closer than any other point), chained over three frames, it tells smooth motion (steps keep their
-direction and speed: seeds on a turning dish) from noisy or random motion (Brownian beads, jitter,
-flow with diffusion). Smooth motion is tracked with the smooth-motion model IM2 and, without
---max-speed, no speed limit: the smoothness limit --phi-max bounds a moving point and the first links
-are chosen among each point's nearest neighbours. Noisy or random motion is tracked by nearest
+output says what it found): from the links no motion could make wrong (mutual nearest neighbours
+much closer than any other point), chained over three frames, it tells smooth motion (steps keep
+their direction and speed: seeds on a turning dish) from noisy or random motion (Brownian beads,
+jitter, flow with diffusion). Smooth motion is tracked with the smooth-motion model IM2 and, without
+--max-speed, no speed limit: the smoothness limit --phi-max bounds a moving point and the first
+links are chosen among each point's nearest neighbours. Noisy or random motion is tracked by nearest
 neighbour (IM1 on squared distances, the likelihood of Gaussian steps) in a frame moving with the
 median step (the drift), within a speed limit of 5 sigma of the step noise about it, both estimated
-from those links, unless --max-speed or --individual-model says otherwise. When too few links are unambiguous to tell (fast or crowded
-scenes), smooth motion is assumed. --motion smooth or random skips the measurement.
+from those links, unless --max-speed or --individual-model says otherwise. When too few links are
+unambiguous to tell (fast or crowded scenes), smooth motion is assumed. --motion smooth or random
+skips the measurement.
 
 POINTS.csv must hold at least two frames; a file with only a header, a single frame, a missing
 column, or a value that is not a finite number is an error (exit 2, nothing written)."""
