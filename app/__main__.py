@@ -1,4 +1,4 @@
-"""``python -m app`` runs the ``seedtrack`` command."""
+"""``python -m seedtrack`` runs the ``seedtrack`` command."""
 
 from .cli import main
 

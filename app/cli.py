@@ -1,6 +1,6 @@
 """The ``seedtrack`` command: parse options, call the library, report.
 
-Every subcommand lives in ``app.commands`` as a module with ``add_parser(subparsers)`` and
+Every subcommand lives in ``seedtrack.commands`` as a module with ``add_parser(subparsers)`` and
 ``run(args) -> int``. Errors a user can fix are reported here in one line with exit status 2.
 """
 
@@ -12,7 +12,7 @@ import os
 import sys
 from typing import Sequence
 
-from data.errors import DataError
+from seedtrack.data.errors import DataError
 
 from .commands import compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
 from .errors import UsageError

@@ -9,10 +9,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data.atomic import atomic_path
-from data.errors import DataError
+from seedtrack.data.atomic import atomic_path
+from seedtrack.data.errors import DataError
 
-from .render import PALETTE_BGR
+from .drawing import PALETTE_BGR
 
 _WIDTH, _HEIGHT = 960, 420
 _LEFT, _RIGHT, _TOP, _BOTTOM = 70, 20, 50, 60

@@ -16,12 +16,12 @@ from typing import Callable
 
 import numpy as np
 
-from data.psmg import PSMGSpec, generate_psmg
-from tracking.goa import GOAConfig, goa
-from tracking.metrics import score_tracks
-from tracking.motion import CombinedModel, IndividualModel
-from tracking.tracks import Tracks
-from tracking.trackers import TRACKERS
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.tracking.goa import GOAConfig, goa
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.tracks import Tracks
+from seedtrack.tracking.trackers import TRACKERS
 
 from .peers import PEERS, PeerFailure, peers_available
 

@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 from PIL import Image
 
-from data.atomic import atomic_path, output_folder
-from data.errors import DataError
-from data.video import write_video
+from seedtrack.data.atomic import atomic_path, output_folder
+from seedtrack.data.errors import DataError
+from seedtrack.data.video import write_video
 
 from .error_plot import write_png
 from .progress import progress_bar

@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
 # laptrack closes gaps of up to this many frames, as IPAN's post-processing does.
 GAP_FRAMES = 2

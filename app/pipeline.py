@@ -14,23 +14,23 @@ from typing import Callable
 
 import numpy as np
 
-from data.atomic import output_folder
-from data.csvio import write_table
-from data.errors import DataError
-from data.frames import FrameSource, open_frames, read_mask
-from data.trackfile import write_tracks
-from data.video import write_video
-from detection.background import temporal_median
-from detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
-from detection.roi import Circle, circle_mask, dish_mask
-from detection.spots import detect_spots
-from tracking.goa import GOAConfig, goa_updown, pass_steps
-from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
-from tracking.regime import choose_motion, fit_motion, track_without_drift
-from tracking.tracks import Tracks
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.csvio import write_table
+from seedtrack.data.errors import DataError
+from seedtrack.data.frames import FrameSource, open_frames, read_mask
+from seedtrack.data.trackfile import write_tracks
+from seedtrack.data.video import write_video
+from seedtrack.detection.background import temporal_median
+from seedtrack.detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
+from seedtrack.detection.roi import Circle, circle_mask, dish_mask
+from seedtrack.detection.spots import detect_spots
+from seedtrack.tracking.goa import GOAConfig, goa_updown, pass_steps
+from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
+from seedtrack.tracking.regime import choose_motion, fit_motion, track_without_drift
+from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
-from .render import FalseDetections, TrackLayer, View, annotate_frames, track_legend
+from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_legend
 from .progress import progress_bar
 from .wording import counted
 
@@ -48,8 +48,8 @@ class DetectionSettings:
     options : BlobOptions
         Polarity ("auto" is decided once, on the first frame), background, threshold, areas.
     detector : {"blob", "log"}
-        Threshold blobs (:func:`detection.blobs.detect_blobs`) or Laplacian-of-Gaussian spots
-        (:func:`detection.spots.detect_spots`).
+        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`) or Laplacian-of-Gaussian spots
+        (:func:`seedtrack.detection.spots.detect_spots`).
     roi : "auto", "none", Circle or Path
         Region of interest: the dish found on the first frame (whole frame if there is none
         clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
@@ -210,10 +210,10 @@ def track_with_motion(
 ) -> Tracks:
     """``track(frames, fitted)`` with ``config`` fitted to the motion of the points.
 
-    The motion is measured by :func:`tracking.regime.choose_motion` (``motion`` is "auto",
+    The motion is measured by :func:`seedtrack.tracking.regime.choose_motion` (``motion`` is "auto",
     "smooth" or "random") and the choice said on one ``motion: ...`` line. Random motion with a
     common drift is tracked in a frame moving with the drift and returned in the image frame
-    (:func:`tracking.regime.track_without_drift`). ``keep_model`` keeps ``config``'s individual
+    (:func:`seedtrack.tracking.regime.track_without_drift`). ``keep_model`` keeps ``config``'s individual
     model (the user chose it).
     """
     choice = choose_motion(frames, motion)
@@ -237,7 +237,7 @@ def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: Lifecycl
 def render_overlay(
     path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
 ) -> None:
-    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`app.render`),
+    """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`seedtrack.drawing`),
     of the frames ``selection.start``, ``end`` and ``step`` select, if given.
 
     Detections that no track holds are marked as false detections.

@@ -5,9 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
-from .render import SHIFT, draw_text, to_fixed, track_colour
+from .drawing import SHIFT, draw_text, to_fixed, track_colour
 
 # Pages are enlarged until they are at least this wide, so ids of small clips stay readable.
 _MIN_PAGE_WIDTH = 1280

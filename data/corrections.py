@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
 from .errors import DataError

@@ -18,7 +18,7 @@ from typing import Iterator
 import cv2
 import numpy as np
 
-from tracking.tracks import NO_MEASUREMENT, Tracks
+from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
 
 from .csvio import write_table
 from .video import write_video
@@ -331,7 +331,7 @@ def write_dish_clip(spec: DishSpec, out_dir: str | os.PathLike, *, progress=None
     out_dir : path-like
         Folder, created if missing.
     progress : tqdm-like or callable, optional
-        Passed to :func:`data.video.write_video`; ticked once per frame.
+        Passed to :func:`seedtrack.data.video.write_video`; ticked once per frame.
     crf : int
         x264 quality; the default keeps compression from moving seed centroids by more than a
         few hundredths of a pixel.

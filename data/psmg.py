@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tracking.tracks import NO_MEASUREMENT, Tracks
+from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
 
 # Candidate trajectories drawn per wanted one and per attempt; slow points in a big view
 # almost always fit, fast ones in a small view need more.

@@ -1,7 +1,7 @@
 """Track files: read and write track sets, whatever tool wrote them.
 
 Every command that takes a tracks or truth file reads it through :func:`read_tracks`, so that a
-format added here is accepted everywhere. Formats (see each module in :mod:`data.formats`):
+format added here is accepted everywhere. Formats (see each module in :mod:`seedtrack.data.formats`):
 
 ========== ============================================= =====================================
 name       what                                          chosen by default for
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
 from .errors import DataError

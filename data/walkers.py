@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ class BlobOptions:
     background : {"local", "none", "temporal"}
         "local": a median over windows of ``background_size`` pixels; "none": the frame's
         median grey level everywhere; "temporal": an image the caller passes (the median over
-        time of a static scene, see :func:`detection.background.temporal_median`).
+        time of a static scene, see :func:`seedtrack.detection.background.temporal_median`).
     background_size : float
         Window of the local background, pixels; must be well above an object's size.
     threshold : "otsu", "adaptive" or float
@@ -51,7 +51,7 @@ class BlobOptions:
     max_area_fraction : float
         Largest blob, as a fraction of the frame's pixels, that can be an object.
     split : bool
-        Split blobs of touching objects (see :func:`detection.split.split_touching`).
+        Split blobs of touching objects (see :func:`seedtrack.detection.split.split_touching`).
     """
 
     polarity: str = "auto"

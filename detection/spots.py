@@ -48,7 +48,7 @@ def detect_spots(
     Returns
     -------
     dict of str to ndarray
-        The columns of :func:`detection.blobs.detect_blobs`: ``x``, ``y`` (contrast-weighted
+        The columns of :func:`seedtrack.detection.blobs.detect_blobs`: ``x``, ``y`` (contrast-weighted
         centre within the spot's radius, pixels), ``area`` (pixels above the threshold within
         that radius), ``mean_intensity``, ``eccentricity``; sorted by y, then x.
     """

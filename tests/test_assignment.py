@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from tracking.assignment import UNASSIGNED, solve_dense, solve_sparse, solve_split
+from seedtrack.tracking.assignment import UNASSIGNED, solve_dense, solve_sparse, solve_split
 
 
 def random_problem(rng, n_heads, n_measurements, density):

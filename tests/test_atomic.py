@@ -2,8 +2,8 @@
 
 import pytest
 
-from data.atomic import output_folder
-from data.errors import DataError
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.errors import DataError
 
 
 def test_a_failure_removes_the_empty_folders_it_made_and_nothing_else(tmp_path):

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from tracking.ipan import IPANConfig, bridge_cost, ipan
-from tracking.nn import link_nearest, nearest_neighbour
-from tracking.rs import greedy_conditioned_assignment, rangarajan_shah
-from tracking.ss import sethi_jain
-from tracking.trackers import TRACKERS as REGISTRY, run_tracker
-from tracking.tracks import tracks_from_links
+from seedtrack.tracking.ipan import IPANConfig, bridge_cost, ipan
+from seedtrack.tracking.nn import link_nearest, nearest_neighbour
+from seedtrack.tracking.rs import greedy_conditioned_assignment, rangarajan_shah
+from seedtrack.tracking.ss import sethi_jain
+from seedtrack.tracking.trackers import TRACKERS as REGISTRY, run_tracker
+from seedtrack.tracking.tracks import tracks_from_links
 
 T = np.arange(8.0)
 # Two points crossing between frames 3 and 4; at frames 3 and 4 each is nearer the other's

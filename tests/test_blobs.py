@@ -3,11 +3,11 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from data.dish import DishSpec, make_dish_scene
-from detection.blobs import BlobOptions, choose_polarity, detect_blobs, to_gray
-from detection.roi import dish_mask, find_dish
-from detection.spots import detect_spots
-from tracking.metrics import match_frame
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.detection.blobs import BlobOptions, choose_polarity, detect_blobs, to_gray
+from seedtrack.detection.roi import dish_mask, find_dish
+from seedtrack.detection.spots import detect_spots
+from seedtrack.tracking.metrics import match_frame
 
 
 def nearest_errors(found_x, found_y, truth_xy):

@@ -4,8 +4,8 @@ import motmetrics as mm
 import numpy as np
 import pytest
 
-from tracking.clear_mot import clear_mot
-from tracking.tracks import Tracks
+from seedtrack.tracking.clear_mot import clear_mot
+from seedtrack.tracking.tracks import Tracks
 
 
 def _truth(rng, n_tracks, n_frames):

@@ -7,9 +7,9 @@ import av
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.csvio import read_table
-from data.dish import DishSpec, write_dish_clip
+from seedtrack.cli import main
+from seedtrack.data.csvio import read_table
+from seedtrack.data.dish import DishSpec, write_dish_clip
 
 
 def seedtrack(*args):
@@ -79,12 +79,12 @@ def test_bad_input_is_one_line_exit_2_and_no_outputs(tmp_path, make_input, messa
 
 @pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("link_frames", ["detections.csv"])])
 def test_ctrl_c_keeps_finished_files_and_leaves_no_empty_folder(small_clip, tmp_path, capsys, monkeypatch, stage, kept):
-    import app.pipeline
+    import seedtrack.pipeline
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(app.pipeline, stage, interrupted)
+    monkeypatch.setattr(seedtrack.pipeline, stage, interrupted)
     out = tmp_path / "out"
     assert main(["run", str(small_clip / "clip.mp4"), "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err

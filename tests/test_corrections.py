@@ -7,13 +7,13 @@ import sys
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.corrections import apply_corrections, read_corrections
-from data.dish import DishSpec, write_dish_clip
-from data.errors import DataError
-from data.trackfile import read_tracks, write_tracks
-from tracking.metrics import UNMATCHED, match_points
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.data.corrections import apply_corrections, read_corrections
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.data.errors import DataError
+from seedtrack.data.trackfile import read_tracks, write_tracks
+from seedtrack.tracking.metrics import UNMATCHED, match_points
+from seedtrack.tracking.tracks import Tracks
 
 
 def _tracks():

@@ -7,11 +7,11 @@ import cv2
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.csvio import read_table
-from data.dish import DishSpec, make_dish_scene, write_dish_clip
-from data.video import write_video
-from tracking.metrics import match_frame
+from seedtrack.cli import main
+from seedtrack.data.csvio import read_table
+from seedtrack.data.dish import DishSpec, make_dish_scene, write_dish_clip
+from seedtrack.data.video import write_video
+from seedtrack.tracking.metrics import match_frame
 
 COLUMNS = ["frame", "x", "y", "area", "mean_intensity", "eccentricity"]
 SPEC = DishSpec(seeds=30, frames=4, width=320, height=240, rim_speed=15.0, random_seed=7, touching_pairs=3, rim=True, glare_spots=2, dust_specks=8)

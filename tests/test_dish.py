@@ -6,10 +6,10 @@ import cv2
 import numpy as np
 import pytest
 
-from data.csvio import read_table
-from data.dish import DishSpec, make_dish_scene, write_dish_clip
-from data.frames import open_frames
-from tracking.tracks import Tracks
+from seedtrack.data.csvio import read_table
+from seedtrack.data.dish import DishSpec, make_dish_scene, write_dish_clip
+from seedtrack.data.frames import open_frames
+from seedtrack.tracking.tracks import Tracks
 
 # Between the dimmest dish (215) and the seed bodies (40-60): a seed's blurred rim is still
 # captured by a one-pixel dilation.

@@ -8,11 +8,11 @@ import cv2
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.dish import DishSpec, write_dish_clip
-from data.trackfile import read_tracks, write_tracks
-from tracking.diagnosis import first_errors
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.data.trackfile import read_tracks, write_tracks
+from seedtrack.tracking.diagnosis import first_errors
+from seedtrack.tracking.tracks import Tracks
 
 
 def seedtrack(*args):

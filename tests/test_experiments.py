@@ -7,12 +7,12 @@ import cv2
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.experiments import EXPERIMENTS, Task, ci95, run_task, trackers_of
-from app.peers import PEERS, PeerFailure, peers_available
-from data.csvio import read_table
-from data.psmg import PSMGSpec, generate_psmg
-from tracking.trackers import TRACKERS, estimate_speed_limit, run_tracker
+from seedtrack.cli import main
+from seedtrack.experiments import EXPERIMENTS, Task, ci95, run_task, trackers_of
+from seedtrack.peers import PEERS, PeerFailure, peers_available
+from seedtrack.data.csvio import read_table
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.tracking.trackers import TRACKERS, estimate_speed_limit, run_tracker
 
 
 def test_psmg_is_deterministic_stays_in_view_and_matches_its_truth():

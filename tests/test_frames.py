@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from data.errors import DataError
-from data.frames import open_frames
-from data.video import write_video
+from seedtrack.data.errors import DataError
+from seedtrack.data.frames import open_frames
+from seedtrack.data.video import write_video
 
 
 def flat_frames(count: int, width: int = 64, height: int = 48) -> list[np.ndarray]:

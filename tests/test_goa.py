@@ -5,12 +5,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.experiments import BASE, EXPERIMENTS, Task, run_task
-from data.dish import DishSpec, make_dish_scene
-from data.psmg import generate_psmg
-from tracking.goa import GOAConfig, goa, goa_updown
-from tracking.metrics import score_tracks
-from tracking.tracks import NO_MEASUREMENT, Tracks
+from seedtrack.experiments import BASE, EXPERIMENTS, Task, run_task
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.psmg import generate_psmg
+from seedtrack.tracking.goa import GOAConfig, goa, goa_updown
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
 
 
 def crossing_scene():

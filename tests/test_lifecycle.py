@@ -9,19 +9,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from app.cli import main
-from app.experiments import BASE
-from data.csvio import read_table, write_table
-from data.dish import DishSpec, make_dish_scene
-from data.frames import open_frames
-from data.psmg import generate_psmg
-from detection.blobs import BlobOptions, detect_blobs
-from tracking.gap_closing import close_gaps
-from tracking.goa import GOAConfig
-from tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
-from tracking.metrics import score_tracks
-from tracking.trackers import run_tracker
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.experiments import BASE
+from seedtrack.data.csvio import read_table, write_table
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.frames import open_frames
+from seedtrack.data.psmg import generate_psmg
+from seedtrack.detection.blobs import BlobOptions, detect_blobs
+from seedtrack.tracking.gap_closing import close_gaps
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.trackers import run_tracker
+from seedtrack.tracking.tracks import Tracks
 
 T = np.arange(12.0)
 # Two points moving steadily in opposite directions, far apart.

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from tracking.motion import CombinedModel, IndividualModel, smooth_motion_cost, smooth_motion_speed_ratio_limit
+from seedtrack.tracking.motion import CombinedModel, IndividualModel, smooth_motion_cost, smooth_motion_speed_ratio_limit
 
 
 def test_im2_is_zero_for_unchanged_motion_and_grows_with_turning():

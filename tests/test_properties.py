@@ -4,9 +4,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tracking.goa import GOAConfig, goa, goa_updown, initial_links
-from tracking.trackers import TRACKERS, run_tracker
-from tracking.tracks import NO_MEASUREMENT
+from seedtrack.tracking.goa import GOAConfig, goa, goa_updown, initial_links
+from seedtrack.tracking.trackers import TRACKERS, run_tracker
+from seedtrack.tracking.tracks import NO_MEASUREMENT
 
 FAST = settings(max_examples=25, deadline=None)
 

@@ -5,17 +5,17 @@ import re
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.csvio import write_table
-from data.dish import DishSpec, make_dish_scene
-from data.trackfile import read_tracks
-from data.walkers import WalkerSpec, generate_walkers
-from data.psmg import PSMGSpec, generate_psmg
-from tracking.goa import GOAConfig
-from tracking.metrics import score_tracks
-from tracking.motion import IndividualModel
-from tracking.regime import choose_motion, fit_motion, step_sigma, track_without_drift
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.data.csvio import write_table
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.trackfile import read_tracks
+from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.motion import IndividualModel
+from seedtrack.tracking.regime import choose_motion, fit_motion, step_sigma, track_without_drift
+from seedtrack.tracking.tracks import Tracks
 
 
 def walkers(count=300, sigma=1.5, drift=(0.0, 0.0), frames=20):

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from app.cli import main
-from app.commands.compare import disagreeing_links
-from app.render import PALETTE_BGR, WARNING_BGR, FalseDetections, TrackLayer, View, annotate, draw_text, track_colour
-from data.csvio import write_table
-from data.dish import DishSpec, write_dish_clip
-from data.frames import open_frames
-from data.trackfile import read_tracks, write_tracks
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.commands.compare import disagreeing_links
+from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, TrackLayer, View, annotate, draw_text, track_colour
+from seedtrack.data.csvio import write_table
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.data.frames import open_frames
+from seedtrack.data.trackfile import read_tracks, write_tracks
+from seedtrack.tracking.tracks import Tracks
 
 FRAMES, WIDTH, HEIGHT = 8, 320, 240
 
@@ -261,9 +261,9 @@ def test_compare_side_by_side_clip_is_twice_as_wide(clip, tmp_path, capsys):
 
 @pytest.mark.parametrize("name, kept", [("clip.mp4", []), ("clip.gif", []), ("frames/", ["frame_000000.png", "frame_000001.png"])])
 def test_ctrl_c_leaves_no_partial_file(clip, tmp_path, capsys, monkeypatch, name, kept):
-    import app.render
+    import seedtrack.drawing
 
-    real, calls = app.render.annotate, []
+    real, calls = seedtrack.drawing.annotate, []
 
     def interrupted(*args, **kwargs):
         calls.append(1)
@@ -271,7 +271,7 @@ def test_ctrl_c_leaves_no_partial_file(clip, tmp_path, capsys, monkeypatch, name
             raise KeyboardInterrupt
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(app.render, "annotate", interrupted)
+    monkeypatch.setattr(seedtrack.drawing, "annotate", interrupted)
     status, err = render(capsys, clip / "clip.mp4", clip / "truth.csv", "--out", f"{tmp_path}/{name}")
     assert status == 130 and "interrupted" in err
     left = sorted(path.name for path in tmp_path.rglob("*") if path.is_file())

@@ -6,8 +6,8 @@ import sys
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.csvio import read_table
+from seedtrack.cli import main
+from seedtrack.data.csvio import read_table
 
 
 def seedtrack(*args):

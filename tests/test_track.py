@@ -6,12 +6,12 @@ import sys
 import numpy as np
 import pytest
 
-from app.cli import main
-from data.csvio import read_table, write_table
-from data.psmg import PSMGSpec, generate_psmg
-from data.walkers import WalkerSpec, generate_walkers
-from tracking.trackers import TRACKERS
-from tracking.tracks import Tracks
+from seedtrack.cli import main
+from seedtrack.data.csvio import read_table, write_table
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.tracking.trackers import TRACKERS
+from seedtrack.tracking.tracks import Tracks
 
 FIRST_FRAME = 7
 

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from data.corrections import read_corrections
-from data.errors import DataError
-from data.trackfile import read_tracks, write_tracks
-from tracking.tracks import Tracks
+from seedtrack.data.corrections import read_corrections
+from seedtrack.data.errors import DataError
+from seedtrack.data.trackfile import read_tracks, write_tracks
+from seedtrack.tracking.tracks import Tracks
 
 
 def _tracks(seed=0, n_tracks=12, n_frames=9, first_frame=2):

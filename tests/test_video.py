@@ -6,8 +6,8 @@ import av
 import numpy as np
 import pytest
 
-from data.errors import DataError
-from data.video import probe_video, write_video
+from seedtrack.data.errors import DataError
+from seedtrack.data.video import probe_video, write_video
 
 
 def gradient_frames(count: int, width: int = 64, height: int = 48, gray: bool = False) -> list[np.ndarray]:

@@ -12,7 +12,7 @@ def first_errors(result: Tracks, truth: Tracks, tolerance: float) -> dict[str, n
     """For every true track that no single result track follows throughout, its first error.
 
     A true track is followed by the result track matched to it in its first measured frame
-    (points matched as in :func:`tracking.metrics.match_points`); its first error is the first
+    (points matched as in :func:`seedtrack.tracking.metrics.match_points`); its first error is the first
     measured frame where another result track, or none, stands for it. These are exactly the
     tracks that the strict track error counts as wrong.
 

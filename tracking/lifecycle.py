@@ -2,7 +2,7 @@
 
 GOA as published keeps the heads it starts with. Its discussion proposes the open variant
 implemented here: at every frame step GOA first extends the established tracks (one optimal
-assignment with slaves and false tracks, :func:`tracking.goa.assign_step`), then the
+assignment with slaves and false tracks, :func:`seedtrack.tracking.goa.assign_step`), then the
 measurements that no track took are linked into new tracks. A new track opens only when its
 first measurements chain smoothly over three frames in a row (scored like the first links of
 GOA-updown, then confirmed by GOA itself on the leftover measurements), so that a false
@@ -11,7 +11,7 @@ slaves in a row; its trailing slaves are dropped and its inner gaps are interpol
 
 The up pass runs forwards; the down pass runs backwards in time from the tracks the up pass
 holds at the last frame, so that every track start is re-decided with the velocities learned
-later, as in GOA-updown. Gap closing (:mod:`tracking.gap_closing`) then joins a track end to a
+later, as in GOA-updown. Gap closing (:mod:`seedtrack.tracking.gap_closing`) then joins a track end to a
 later track start when the motion model says they are one object.
 """
 
@@ -48,7 +48,7 @@ class LifecycleConfig:
         this length are filled by interpolation, and gap closing joins a track end to a track
         start at most this many frames later.
     close_gaps : bool
-        Join track ends to later starts after the passes (see :mod:`tracking.gap_closing`).
+        Join track ends to later starts after the passes (see :mod:`seedtrack.tracking.gap_closing`).
     """
 
     max_gap: int = 10

@@ -7,13 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from data.trackfile import FORMATS, read_tracks
-from tracking.metrics import UNMATCHED, match_points
-from tracking.tracks import Tracks
+from seedtrack.data.trackfile import FORMATS, read_tracks
+from seedtrack.tracking.metrics import UNMATCHED, match_points
+from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError
 from ..frame_output import write_frames
-from ..render import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
+from ..drawing import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
 from ..wording import counted
 from .render import add_view_options, check_view_options, open_range
 
@@ -55,7 +55,7 @@ def disagreeing_links(tracks: Tracks, other: Tracks, tolerance: float) -> np.nda
     Returns
     -------
     ndarray of bool, shape (tracks.n_tracks, tracks.n_frames)
-        True at the column where a link (see :func:`app.render.track_links`) ends when its two
+        True at the column where a link (see :func:`seedtrack.drawing.track_links`) ends when its two
         points are not both matched to the same track of ``other``.
     """
     matched = match_points(tracks, other, tolerance)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from data.corrections import apply_corrections, read_corrections
-from data.trackfile import FORMATS, read_tracks, write_tracks
+from seedtrack.data.corrections import apply_corrections, read_corrections
+from seedtrack.data.trackfile import FORMATS, read_tracks, write_tracks
 
 from ..errors import output_file
 from ..wording import counted

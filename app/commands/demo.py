@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from data.atomic import output_folder
-from data.dish import DishSpec, write_dish_clip
-from data.trackfile import read_tracks
-from tracking.metrics import score_tracks
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.data.trackfile import read_tracks
+from seedtrack.tracking.metrics import score_tracks
 
 from ..errors import UsageError
 from ..pipeline import DetectionSettings, run_pipeline

@@ -13,15 +13,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from data.atomic import atomic_path, check_target
-from data.csvio import write_table
-from data.errors import DataError
-from data.frames import IMAGE_SUFFIXES
-from detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
-from detection.roi import Circle
+from seedtrack.data.atomic import atomic_path, check_target
+from seedtrack.data.csvio import write_table
+from seedtrack.data.errors import DataError
+from seedtrack.data.frames import IMAGE_SUFFIXES
+from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
+from seedtrack.detection.roi import Circle
 
 from ..errors import UsageError, option_name, output_file
-from ..render import SHIFT, draw_text, to_fixed
+from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
 from ..wording import counted

@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from data.atomic import atomic_path, output_folder
-from data.csvio import write_table
-from data.errors import DataError
-from data.trackfile import FORMATS, read_tracks
-from tracking.clear_mot import clear_mot
-from tracking.diagnosis import first_errors
-from tracking.metrics import score_tracks
-from tracking.tracks import Tracks
+from seedtrack.data.atomic import atomic_path, output_folder
+from seedtrack.data.csvio import write_table
+from seedtrack.data.errors import DataError
+from seedtrack.data.trackfile import FORMATS, read_tracks
+from seedtrack.tracking.clear_mot import clear_mot
+from seedtrack.tracking.diagnosis import first_errors
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
@@ -59,7 +59,7 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
     clear : ClearMotScores
         With the per-frame counts.
     wrong : dict of str to ndarray
-        :func:`tracking.diagnosis.first_errors` of the result.
+        :func:`seedtrack.tracking.diagnosis.first_errors` of the result.
     hint : str or None
         When most true points match nothing but would with the truth's frame numbers one off,
         a line that says so (truth numbered from 1 against tracks from 0 is a common slip).

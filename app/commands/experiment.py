@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from data.atomic import output_folder
-from data.csvio import write_table
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.csvio import write_table
 
 from ..error_plot import draw_line_plot, write_png
 from ..errors import UsageError

@@ -5,17 +5,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from data.atomic import check_target
-from data.csvio import read_table
-from data.errors import DataError
-from data.frames import FrameSource, open_frames
-from data.trackfile import FORMATS, read_tracks
-from tracking.tracks import Tracks
+from seedtrack.data.atomic import check_target
+from seedtrack.data.csvio import read_table
+from seedtrack.data.errors import DataError
+from seedtrack.data.frames import FrameSource, open_frames
+from seedtrack.data.trackfile import FORMATS, read_tracks
+from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import write_png
 from ..errors import UsageError
 from ..frame_output import output_kind, write_frames
-from ..render import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
+from ..drawing import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
 from ..wording import counted
 
 DEFAULT_TRAIL = 10
@@ -61,7 +61,7 @@ def add_parser(subparsers) -> None:
 
 
 def check_view_options(args: argparse.Namespace) -> str | None:
-    """The output kind (see :func:`app.frame_output.output_kind`), after checking the options.
+    """The output kind (see :func:`seedtrack.frame_output.output_kind`), after checking the options.
 
     Raises
     ------

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from data.atomic import output_folder
-from data.frames import open_frames
-from data.trackfile import FORMATS, read_tracks
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.frames import open_frames
+from seedtrack.data.trackfile import FORMATS, read_tracks
 
 from ..error_plot import write_png
 from ..errors import UsageError

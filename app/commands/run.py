@@ -6,9 +6,9 @@ import argparse
 import math
 from pathlib import Path
 
-from tracking.goa import GOAConfig
-from tracking.lifecycle import LifecycleConfig
-from tracking.regime import MOTIONS
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig
+from seedtrack.tracking.regime import MOTIONS
 
 from ..errors import UsageError, option_name
 from ..pipeline import run_pipeline

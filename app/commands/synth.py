@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from data.atomic import output_folder
-from data.csvio import write_table
-from data.psmg import PSMGSpec, generate_psmg
-from data.trackfile import write_tracks
+from seedtrack.data.atomic import output_folder
+from seedtrack.data.csvio import write_table
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.data.trackfile import write_tracks
 
 from ..errors import UsageError, option_name
 from ..experiments import BASE

@@ -8,14 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from data.atomic import check_target
-from data.csvio import TRACK_COLUMNS, read_table, write_table
-from data.errors import DataError
-from tracking.goa import GOAConfig, goa, initial_links
-from tracking.lifecycle import drop_short
-from tracking.motion import CombinedModel, IndividualModel
-from tracking.trackers import TRACKERS, run_tracker
-from tracking.tracks import Tracks
+from seedtrack.data.atomic import check_target
+from seedtrack.data.csvio import TRACK_COLUMNS, read_table, write_table
+from seedtrack.data.errors import DataError
+from seedtrack.tracking.goa import GOAConfig, goa, initial_links
+from seedtrack.tracking.lifecycle import drop_short
+from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.trackers import TRACKERS, run_tracker
+from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
 from ..pipeline import link_frames, track_with_motion

@@ -14,7 +14,7 @@ import time
 import cv2
 import numpy as np
 
-from detection.blobs import BlobOptions, detect_blobs
+from seedtrack.detection.blobs import BlobOptions, detect_blobs
 
 
 def scene(width: int, height: int, n_seeds: int, rng: np.random.Generator) -> np.ndarray:

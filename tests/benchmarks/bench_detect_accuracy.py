@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.pipeline import detect_clip
-from data.dish import DishSpec, write_dish_clip
-from tracking.metrics import match_frame
+from seedtrack.pipeline import detect_clip
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.tracking.metrics import match_frame
 
 REAL_CLIP = Path(__file__).resolve().parents[3] / "shared" / "data" / "bulk-water-240-479.mp4"
 

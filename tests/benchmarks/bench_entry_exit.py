@@ -4,7 +4,7 @@ Run as ``python tests/benchmarks/bench_entry_exit.py [--clips N]``. The experime
 (50 points in 200 x 200 px on average, speed 5 px/frame) with points drawn in a larger square so
 that they enter and leave, speed limit 10 px/frame for every tracker. Prints the strict
 trajectory merit (a trajectory counts only if one track follows it over every frame it is
-measured in, 0.5 px) as the mean over N clips with a 95% interval (1.96 standard errors, app.experiments.ci95).
+measured in, 0.5 px) as the mean over N clips with a 95% interval (1.96 standard errors, seedtrack.experiments.ci95).
 """
 
 from __future__ import annotations
@@ -13,12 +13,12 @@ import argparse
 import statistics
 from dataclasses import replace
 
-from app.experiments import BASE, ci95
-from data.psmg import generate_psmg
-from tracking.goa import GOAConfig
-from tracking.lifecycle import LifecycleConfig, goa_updown_open
-from tracking.metrics import score_tracks
-from tracking.trackers import run_tracker
+from seedtrack.experiments import BASE, ci95
+from seedtrack.data.psmg import generate_psmg
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.trackers import run_tracker
 
 SCENES = (
     ("20 frames, no occlusion", dict(frames=20)),

@@ -12,8 +12,8 @@ import argparse
 import sys
 import time
 
-from app.cli import main
-from app.experiments import EXPERIMENTS
+from seedtrack.cli import main
+from seedtrack.experiments import EXPERIMENTS
 
 
 def run() -> int:

@@ -22,11 +22,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from app.experiments import BASE
-from data.dish import DishSpec, make_dish_scene
-from data.psmg import generate_psmg
-from tracking.goa import GOAConfig, goa_updown
-from tracking.metrics import score_tracks
+from seedtrack.experiments import BASE
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.psmg import generate_psmg
+from seedtrack.tracking.goa import GOAConfig, goa_updown
+from seedtrack.tracking.metrics import score_tracks
 
 SCHEMES = {
     "paper": GOAConfig(initialisation="im1", restart_lost=False),

@@ -26,9 +26,9 @@ from dataclasses import replace  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from app.experiments import BASE  # noqa: E402
-from data.psmg import generate_psmg  # noqa: E402
-from tracking.goa import GOAConfig, goa_updown, initial_links  # noqa: E402
+from seedtrack.experiments import BASE  # noqa: E402
+from seedtrack.data.psmg import generate_psmg  # noqa: E402
+from seedtrack.tracking.goa import GOAConfig, goa_updown, initial_links  # noqa: E402
 
 FRAMES = 20
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from app.pipeline import track_with_motion
-from data.dish import DishSpec, make_dish_scene
-from tracking.goa import GOAConfig
-from tracking.lifecycle import LifecycleConfig, goa_updown_open
-from tracking.metrics import score_tracks
+from seedtrack.pipeline import track_with_motion
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.metrics import score_tracks
 
 SEEDS = 80
 GAPS = (2, 5, 10)

@@ -18,16 +18,16 @@ from typing import Callable
 
 import numpy as np
 
-from app.peers import PEERS, PeerFailure, trackpy_linker
-from app.pipeline import track_with_motion
-from data.dish import DishSpec, make_dish_scene
-from data.psmg import PSMGSpec, generate_psmg
-from data.walkers import WalkerSpec, generate_walkers
-from tracking.clear_mot import clear_mot
-from tracking.goa import GOAConfig
-from tracking.lifecycle import LifecycleConfig, goa_updown_open
-from tracking.metrics import score_tracks
-from tracking.tracks import Tracks
+from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
+from seedtrack.pipeline import track_with_motion
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.tracking.clear_mot import clear_mot
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.tracks import Tracks
 
 Scene = tuple[list[np.ndarray], Tracks, float]
 

@@ -15,9 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from app.render import FalseDetections, TrackLayer, View, annotate, track_legend
-from data.video import write_video
-from tracking.tracks import Tracks
+from seedtrack.drawing import FalseDetections, TrackLayer, View, annotate, track_legend
+from seedtrack.data.video import write_video
+from seedtrack.tracking.tracks import Tracks
 
 WIDTH, HEIGHT, TRACKS, FRAMES, TRAIL = 1920, 1080, 200, 40, 10
 

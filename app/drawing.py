@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from tracking.tracks import Tracks
+from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
 
