@@ -40,7 +40,7 @@ from .commands import evaluate as evaluate_command
 from .commands import render as render_command
 from .commands import track as track_command
 from .errors import UsageError
-from .pipeline import DetectionSettings, detect_clip
+from .pipeline import POINT_COLUMNS, DetectionSettings, detect_clip, group_points, point_rows
 
 __all__ = ["detect", "link", "evaluate", "render", "Scores"]
 
@@ -129,31 +129,27 @@ def link(points: pd.DataFrame, **options) -> pd.DataFrame:
 
     Examples
     --------
-    Three points moving right by 3 pixels a frame, the middle one missed in frame 2:
+    Three points moving right by 3 pixels a frame, the middle one missed in frame 3:
 
     >>> import pandas as pd, seedtrack
-    >>> points = pd.DataFrame({
-    ...     "frame": [0, 0, 0, 1, 1, 1, 2, 2, 3, 3, 3],
-    ...     "x": [10.0, 10.0, 10.0, 13.0, 13.0, 13.0, 16.0, 16.0, 19.0, 19.0, 19.0],
-    ...     "y": [10.0, 50.0, 90.0, 10.0, 50.0, 90.0, 10.0, 90.0, 10.0, 50.0, 90.0],
-    ...     "area": [20, 21, 22, 20, 21, 22, 20, 22, 20, 21, 22],
-    ... })
+    >>> rows = [(k, 10.0 + 3 * k, y, area) for k in range(6) for y, area in ((10.0, 20), (50.0, 21), (90.0, 22))]
+    >>> points = pd.DataFrame([row for row in rows if row[:3] != (3, 19.0, 50.0)], columns=["frame", "x", "y", "area"])
     >>> tracks = seedtrack.link(points, max_gap=2)
     >>> tracks.groupby("track_id")["area"].first().tolist()
     [20.0, 21.0, 22.0]
     >>> tracks[tracks.interpolated == 1][["frame", "x", "y"]].values.tolist()
-    [[2.0, 16.0, 50.0]]
+    [[3.0, 19.0, 50.0]]
     """
     args = _arguments(track_command, ["POINTS.csv", "--out", "tracks.csv"], options, "link")
     table = _columns(points, "points", ("frame", "x", "y"), integer=("frame",))
     said: list[str] = []
     with _python_names():
         track_command.check_options(args)
-        grouped = track_command.group_points(table, "points")
+        grouped = group_points(table, "points")
         tracks = track_command.track_points(grouped, args, say=said.append)
-    rows, source = track_command.point_rows(grouped, tracks)
+    rows, source = point_rows(grouped, tracks)
     result = pd.DataFrame(rows)
-    kept = points.drop(columns=[name for name in (*track_command.POINT_COLUMNS, *TRACK_COLUMNS) if name in points.columns])
+    kept = points.drop(columns=[name for name in (*POINT_COLUMNS, *TRACK_COLUMNS) if name in points.columns])
     if len(kept.columns):
         # Row -1 is in no index: reindexing gives the missing values of an interpolated row.
         result = pd.concat([result, kept.reset_index(drop=True).reindex(source).reset_index(drop=True)], axis=1)
@@ -338,7 +334,9 @@ def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer:
         bad = np.flatnonzero(~np.isfinite(values) | ((values != np.round(values)) if column in integer else False))
         if bad.size:
             kind = "a whole number" if column in integer else "a finite number"
-            raise ValueError(f"{name}: row {bad[0]}: column {column} holds {table[column].iloc[bad[0]]!r}, not {kind}")
+            value = table[column].iloc[bad[0]]
+            value = value.item() if isinstance(value, np.generic) else value
+            raise ValueError(f"{name}: row {bad[0]}: column {column} holds {value!r}, not {kind}")
         out[column] = values.astype(np.int64) if column in integer else values
     return out
 

@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from seedtrack.data.atomic import output_folder
-from seedtrack.data.csvio import write_table
+from seedtrack.data.csvio import TRACK_COLUMNS, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
@@ -34,7 +34,12 @@ from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_l
 from .progress import progress_bar
 from .wording import counted
 
-__all__ = ["DETECTORS", "Detections", "DetectionSettings", "ClipDetections", "TrackingSettings", "detect_clip", "track_frames", "render_overlay", "run_pipeline"]
+__all__ = [
+    "DETECTORS", "Detections", "DetectionSettings", "ClipDetections", "Points", "TrackingSettings",
+    "detect_clip", "group_points", "point_rows", "track_frames", "render_overlay", "run_pipeline",
+]
+
+POINT_COLUMNS = ("frame", "x", "y")
 
 
 @dataclass(frozen=True)
@@ -160,6 +165,98 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
 
 
 @dataclass(frozen=True)
+class Points:
+    """Measured points grouped by frame.
+
+    Attributes
+    ----------
+    frames : list of ndarray, each (M_k, 2)
+        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    frame_step : int
+        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
+        of N apart (every Nth frame measured, as ``run --step N`` writes them).
+    order : ndarray of int
+        0-based row of the input table of each point, frame after frame.
+    offset : ndarray of int
+        Position in ``order`` of each frame's first point.
+    kept : dict of str to ndarray
+        The input's other columns (as text when read from a file), one entry per row.
+    """
+
+    frames: list[np.ndarray]
+    first_frame: int
+    frame_step: int
+    order: np.ndarray
+    offset: np.ndarray
+    kept: dict[str, np.ndarray]
+
+
+def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | None = None) -> Points:
+    """Group the points of a table (columns frame, x, y, any others) by frame, sorted by
+    position within each, as ``seedtrack track`` and ``run`` both track them.
+
+    Parameters
+    ----------
+    table : dict of str to ndarray
+        ``frame`` (int), ``x``, ``y`` (finite floats), other columns kept as they are.
+    source
+        What the table was read from, to name in errors.
+    processed : ndarray of int, optional
+        The 0-based frames measured, evenly spaced, when known (a clip detected frame by frame,
+        some frames perhaps empty); by default the frame numbers present.
+
+    Raises
+    ------
+    DataError
+        Without ``processed``: if a frame is negative, or fewer than two frames hold points.
+    """
+    frame, x, y = (table[name] for name in POINT_COLUMNS)
+    if processed is None:
+        if frame.size == 0:
+            raise DataError(source, "no points (only a header); tracking needs points in at least two frames")
+        if frame.min() < 0:
+            bad = int(np.argmax(frame < 0))
+            raise DataError(source, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
+        processed = np.unique(frame)
+        if processed.size < 2:
+            raise DataError(source, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
+    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
+    # other frame missed (which no track would survive).
+    step = int(np.gcd.reduce(np.diff(processed))) if processed.size > 1 else 1
+    # Sorting by position makes the result independent of the order of the rows.
+    order = np.lexsort((y, x, frame))
+    first = int(processed[0])
+    columns = (int(processed[-1]) - first) // step + 1
+    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step, minlength=columns))))
+    xy = np.column_stack((x, y))[order]
+    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
+    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
+    return Points(frames, first, step, order, offset[:-1], kept)
+
+
+def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The track columns of tracks.csv, in the input's frame numbers, and for each row the 0-based
+    row of the input table it measures (-1 where interpolated), so that nothing is joined on floats.
+
+    A measured row holds its point's position exactly as given (tracking in a frame moving with
+    the drift and back can change the last bits).
+    """
+    rows = tracks.to_rows()
+    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
+    column = rows["frame"] - tracks.first_frame
+    rows["frame"] = tracks.first_frame + column * points.frame_step
+    measured = measurement >= 0
+    position = points.offset[column[measured]] + measurement[measured]
+    sorted_xy = np.concatenate(points.frames) if points.frames else np.empty((0, 2))
+    rows["x"][measured], rows["y"][measured] = sorted_xy[position, 0], sorted_xy[position, 1]
+    source = np.full(measurement.size, -1, dtype=np.int64)
+    source[measured] = points.order[position]
+    return rows, source
+
+
+@dataclass(frozen=True)
 class TrackingSettings:
     """What the tracker is asked to do: the options of ``seedtrack track`` (and of ``run``).
 
@@ -235,8 +332,11 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
     with output_folder(out):
         found = detect_clip(clip, detection)
         detections = found.detections
-        write_table(out / "detections.csv", detections.to_rows())
-        tracks = track_frames(detections.points, tracking)
+        rows = detections.to_rows()
+        write_table(out / "detections.csv", rows)
+        # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
+        # columns of the tracks are the processed frames, as the overlay and the writer take them.
+        tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
         write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
         render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=detection)
     return detections, tracks

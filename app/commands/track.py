@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import TRACK_COLUMNS, read_table, write_table
-from seedtrack.data.errors import DataError
+from seedtrack.data.csvio import read_table, write_table
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import GOA_FAMILY
 from seedtrack.tracking.motion import CombinedModel, IndividualModel
@@ -18,11 +16,10 @@ from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
-from ..pipeline import track_frames
+from ..pipeline import POINT_COLUMNS, Points, group_points, point_rows, track_frames
 from ..wording import counted
 from .run import add_tracker_options, check_limits, lifecycle_config, tracking_settings
 
-POINT_COLUMNS = ("frame", "x", "y")
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
 FIRST_LINKS = {
     "lookahead": {},
@@ -123,75 +120,9 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run, phi_max=None, motion=None)
 
 
-@dataclass(frozen=True)
-class Points:
-    """Measured points grouped by frame.
-
-    Attributes
-    ----------
-    frames : list of ndarray, each (M_k, 2)
-        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
-    first_frame : int
-        0-based frame index of ``frames[0]``.
-    frame_step : int
-        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
-        of N apart (every Nth frame measured, as ``run --step N`` writes them).
-    order : ndarray of int
-        0-based data row of POINTS.csv of each point, frame after frame.
-    offset : ndarray of int
-        Position in ``order`` of each frame's first point.
-    kept : dict of str to ndarray
-        The input's other columns, as text, one entry per data row.
-    """
-
-    frames: list[np.ndarray]
-    first_frame: int
-    frame_step: int
-    order: np.ndarray
-    offset: np.ndarray
-    kept: dict[str, np.ndarray]
-
-
 def read_points(path: Path) -> Points:
     """Read POINTS.csv and group its points by frame (see :func:`group_points`)."""
     return group_points(read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True), path)
-
-
-def group_points(table: dict[str, np.ndarray], source) -> Points:
-    """Group the points of a table (columns frame, x, y, any others) by frame.
-
-    Parameters
-    ----------
-    table : dict of str to ndarray
-        ``frame`` (int), ``x``, ``y`` (finite floats), other columns kept as they are.
-    source
-        What the table was read from, to name in errors.
-
-    Raises
-    ------
-    DataError
-        If a frame is negative, or fewer than two frames hold points.
-    """
-    frame, x, y = (table[name] for name in POINT_COLUMNS)
-    if frame.size == 0:
-        raise DataError(source, "no points (only a header); tracking needs points in at least two frames")
-    if frame.min() < 0:
-        bad = int(np.argmax(frame < 0))
-        raise DataError(source, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
-    present = np.unique(frame)
-    if present.size < 2:
-        raise DataError(source, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
-    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
-    # other frame missed (which no track would survive).
-    step = int(np.gcd.reduce(np.diff(present)))
-    # Sorting by position makes the result independent of the order of the rows.
-    order = np.lexsort((y, x, frame))
-    first = int(present[0])
-    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step))))
-    xy = np.column_stack((x, y))[order]
-    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
-    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
-    return Points(frames, first, step, order, offset[:-1], kept)
 
 
 def goa_config(args: argparse.Namespace) -> GOAConfig:
@@ -236,19 +167,6 @@ def check_options(args: argparse.Namespace) -> None:
 def track_points(points: Points, args: argparse.Namespace, say=print) -> Tracks:
     """Run the tracker the options name on the points (see :func:`seedtrack.pipeline.track_frames`)."""
     return track_frames(points.frames, tracking_settings(args, goa_config(args)), points.first_frame, say)
-
-
-def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """The track columns of tracks.csv, in the input's frame numbers, and for each row the 0-based
-    row of the input table it measures (-1 where interpolated), so that nothing is joined on floats."""
-    rows = tracks.to_rows()
-    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
-    column = rows["frame"] - tracks.first_frame
-    rows["frame"] = tracks.first_frame + column * points.frame_step
-    measured = measurement >= 0
-    source = np.full(measurement.size, -1, dtype=np.int64)
-    source[measured] = points.order[points.offset[column[measured]] + measurement[measured]]
-    return rows, source
 
 
 def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
