@@ -234,7 +234,7 @@ def render(source: PathLike, tracks: pd.DataFrame | PathLike | Tracks, out: Path
     if options.get("summary") is not None:
         options["summary"] = Path(options["summary"])
     detections = options.pop("detections", None)
-    args = _arguments(render_command, ["INPUT", "TRACKS"], options, "render")
+    args = _arguments(render_command, ["INPUT", "TRACKS"], options, "render", exclude=("out",))
     args.input = Path(source)
     args.out = None if out is None else str(out)
     with _python_names():
@@ -299,7 +299,19 @@ def _roi_text(roi) -> str:
 def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) -> Detections:
     """:func:`seedtrack.pipeline.detect_clip` on frames in memory."""
     selected = itertools.islice(enumerate(source), settings.start, settings.end, settings.step)
-    checked = ((index, _frame(index, image)) for index, image in selected)
+    shape: list[tuple[int, ...]] = []
+
+    def checked_frames() -> Iterator[tuple[int, np.ndarray]]:
+        for index, image in selected:
+            image = np.asarray(image)
+            if image.dtype != np.uint8 or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+                raise ValueError(f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, got {image.dtype} of shape {image.shape}")
+            if shape and image.shape[:2] != shape[0]:
+                raise ValueError(f"frame {index} is {image.shape[1]}x{image.shape[0]}, the first {shape[0][1]}x{shape[0][0]}")
+            shape[:] = [image.shape[:2]]
+            yield index, image
+
+    checked = checked_frames()
     first = next(checked, None)
     if first is None:
         raise ValueError("no frame to detect in (after start, end and step)")
@@ -312,13 +324,6 @@ def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) ->
     if isinstance(roi, Path):
         roi = read_mask(roi, (first[1].shape[1], first[1].shape[0]))
     return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background))
-
-
-def _frame(index: int, image) -> np.ndarray:
-    image = np.asarray(image)
-    if image.dtype != np.uint8 or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
-        raise ValueError(f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, got {image.dtype} of shape {image.shape}")
-    return image
 
 
 def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer: tuple[str, ...]) -> dict[str, np.ndarray]:

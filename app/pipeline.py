@@ -1,6 +1,10 @@
 """The run pipeline: frames -> detections -> tracks -> files and an overlay clip.
 
-Frames are streamed twice (once to detect, once to draw) rather than held in memory, so the
+The layer between files and the library that every command and the Python API
+(:mod:`seedtrack.api`) call: :func:`detect_clip` reads a clip for
+:class:`seedtrack.detection.clip.ClipDetector`, :func:`group_points` and :func:`track_frames`
+give points to :func:`seedtrack.tracking.linking.link_goa` (or another tracker) as ``seedtrack
+track`` does. Frames are streamed twice (once to detect, once to draw) rather than held in memory, so the
 clip's length does not bound what can be processed.
 """
 
@@ -93,7 +97,8 @@ class ClipDetections:
 
 
 def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None) -> ClipDetections:
-    """Detect objects in every frame of a clip, with a progress bar.
+    """Detect objects in every frame of a clip, with a progress bar
+    (:class:`seedtrack.detection.clip.ClipDetector` on the frames read).
 
     A video that breaks off part way keeps the frames decoded before, and one line on standard
     error says where it stopped.

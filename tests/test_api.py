@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pandas as pd
 import pytest
@@ -98,6 +99,13 @@ def test_detection_options_reach_the_detector_as_the_command_gives_them(dish, tm
     with open_frames(clip) as source:
         in_memory = seedtrack.detect((image for _, image in source), roi=(160, 120, 90), threshold=25, start=1, step=2, background="temporal")
     pd.testing.assert_frame_equal(in_memory, points)
+    mask = np.zeros((240, 320), np.uint8)
+    mask[40:200, 60:260] = 255
+    cv2.imwrite(str(tmp_path / "mask.png"), mask)
+    command(capsys, "detect", clip, "--out", tmp_path / "masked.csv", "--roi", tmp_path / "mask.png")
+    with open_frames(clip) as source:
+        masked = seedtrack.detect((image for _, image in source), roi=tmp_path / "mask.png")
+    assert as_file(tmp_path, "api-masked.csv", masked) == (tmp_path / "masked.csv").read_bytes()
 
 
 def points_file(tmp_path, frames: list[np.ndarray]) -> pd.DataFrame:
@@ -175,6 +183,8 @@ def test_options_are_the_commands_and_mistakes_name_the_keyword():
         seedtrack.detect([np.zeros((10, 10), np.float32)])
     with pytest.raises(ValueError, match="^threshold must be otsu"):
         seedtrack.detect([np.zeros((10, 10), np.uint8)], threshold="high")
+    with pytest.raises(ValueError, match="frame 1 is 12x10, the first 10x10"):
+        seedtrack.detect([np.zeros((10, 10), np.uint8), np.zeros((10, 12), np.uint8)])
     with pytest.raises(TypeError, match="preview"):
         seedtrack.detect([np.zeros((10, 10), np.uint8)], preview="p.png")
 
