@@ -216,6 +216,16 @@ def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | N
     ------
     DataError
         Without ``processed``: if a frame is negative, or fewer than two frames hold points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([2, 0, 0, 4]), "x": np.array([5.0, 9.0, 1.0, 3.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> points.first_frame, points.frame_step, [f[:, 0].tolist() for f in points.frames]
+    (0, 2, [[1.0, 9.0], [5.0], [3.0]])
+    >>> points.order.tolist()
+    [2, 1, 0, 3]
     """
     frame, x, y = (table[name] for name in POINT_COLUMNS)
     if processed is None:
@@ -247,6 +257,15 @@ def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], n
 
     A measured row holds its point's position exactly as given (tracking in a frame moving with
     the drift and back can change the last bits).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([1, 0, 1, 0]), "x": np.array([11.0, 0.0, 1.0, 10.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> rows, source = point_rows(points, track_frames(points.frames, TrackingSettings(algorithm="nn"), say=None))
+    >>> rows["track_id"].tolist(), source.tolist()
+    ([0, 0, 1, 1], [1, 2, 3, 0])
     """
     rows = tracks.to_rows()
     measurement = tracks.measurement[tracks.present]  # same row order as to_rows
@@ -290,12 +309,22 @@ class TrackingSettings:
     min_length: int = 0
 
 
-def track_frames(frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] = print) -> Tracks:
+def track_frames(
+    frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] | None = print
+) -> Tracks:
     """Track points as ``settings`` say, with a progress bar, and drop the short tracks.
 
     The GOA family says on one ``motion: ...`` line how the points move
-    (:attr:`seedtrack.tracking.linking.MotionFit.summary`). ``first_frame`` is the 0-based index
-    of ``frames[0]``.
+    (:attr:`seedtrack.tracking.linking.MotionFit.summary`) to ``say`` (None: to nobody).
+    ``first_frame`` is the 0-based index of ``frames[0]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> frames = [np.array([[10.0 + 2 * k, 10.0], [40.0 - 2 * k, 30.0]]) for k in range(6)]
+    >>> track_frames(frames, TrackingSettings(min_length=3)).n_tracks  # doctest: +ELLIPSIS
+    motion: smooth-motion default: only 8 unambiguous 3-frame chains (need 30) ...
+    2
     """
     if settings.algorithm not in GOA_FAMILY:
         return drop_short(run_tracker(settings.algorithm, frames, settings.config.d_max, first_frame), settings.min_length)
@@ -303,7 +332,8 @@ def track_frames(frames: list[np.ndarray], settings: TrackingSettings = Tracking
         tracks, fit = link_goa(
             frames, settings.algorithm, settings.config, settings.lifecycle, settings.motion, settings.keep_model, first_frame, progress=bar.update
         )
-    say(fit.summary)
+    if say is not None:
+        say(fit.summary)
     return drop_short(tracks, settings.min_length)
 
 
