@@ -255,8 +255,6 @@ def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], n
     """The track columns of tracks.csv, in the input's frame numbers, and for each row the 0-based
     row of the input table it measures (-1 where interpolated), so that nothing is joined on floats.
 
-    A measured row holds its point's position exactly as given (tracking in a frame moving with
-    the drift and back can change the last bits).
 
     Examples
     --------
@@ -272,11 +270,8 @@ def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], n
     column = rows["frame"] - tracks.first_frame
     rows["frame"] = tracks.first_frame + column * points.frame_step
     measured = measurement >= 0
-    position = points.offset[column[measured]] + measurement[measured]
-    sorted_xy = np.concatenate(points.frames) if points.frames else np.empty((0, 2))
-    rows["x"][measured], rows["y"][measured] = sorted_xy[position, 0], sorted_xy[position, 1]
     source = np.full(measurement.size, -1, dtype=np.int64)
-    source[measured] = points.order[position]
+    source[measured] = points.order[points.offset[column[measured]] + measurement[measured]]
     return rows, source
 
 

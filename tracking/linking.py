@@ -10,7 +10,7 @@ IM2 follows chance alignments from one neighbour to the next.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
@@ -138,7 +138,18 @@ def link_goa(
             return goa_updown(moved, fit.config, first_frame, progress=progress)
         return goa_updown_open(moved, fit.config, lifecycle, first_frame, progress=progress)
 
-    return track_without_drift(frames, fit.drift, track), fit
+    tracks = track_without_drift(frames, fit.drift, track)
+    return (_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
+
+
+def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
+    """``tracks`` with each measured position the measurement itself: moving into the drift's
+    frame and back changes the last bits, and a measured point must keep its position."""
+    held = np.nonzero(tracks.measurement >= 0)
+    offset = np.concatenate(([0], np.cumsum([f.shape[0] for f in frames])))
+    xy = tracks.xy.copy()
+    xy[held] = np.concatenate(frames)[offset[held[1]] + tracks.measurement[held]]
+    return replace(tracks, xy=xy)
 
 
 def pass_steps(algorithm: str, n_frames: int) -> int:
