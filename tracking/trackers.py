@@ -66,12 +66,14 @@ TRACKERS: dict[str, Tracker] = {
         Tracker(
             "goa-updown",
             "GOA-updown with track initiation and termination: tracks open from leftover points measured in three "
-            "frames in a row, end after 10 missed frames, and are joined across gaps of up to 10 frames",
+            "frames in a row, end after 10 missed frames, and are joined across gaps of up to 10 frames; the motion "
+            "model fitted to the points (smooth: IM2; random: IM1 about the drift)",
             lambda frames, max_speed, first: link_goa(frames, "goa-updown", GOAConfig(d_max=max_speed), first_frame=first)[0],
         ),
         Tracker(
             "goa-updown-fixed",
-            "GOA-updown as published (Veenman et al. 2001): one track per point of the first frame, IM2, slaves",
+            "GOA-updown as published (Veenman et al. 2001): one track per point of the first frame, slaves; "
+            "the motion model fitted to the points",
             lambda frames, max_speed, first: link_goa(frames, "goa-updown-fixed", GOAConfig(d_max=max_speed), first_frame=first)[0],
         ),
         Tracker(
