@@ -58,25 +58,25 @@ def doubtful_places(tracks: Tracks, detections: list[np.ndarray] | None = None, 
     [(2, 1, 'close call'), (2, 2, 'close call')]
     """
     places = _close_calls(tracks, detections)
-    present = tracks.present
-    last_frame = (n_frames if n_frames is not None else tracks.first_frame + tracks.n_frames) - 1
+    present, slave, ids, offset = tracks.present, tracks.interpolated, tracks.track_ids, tracks.first_frame
+    last_frame = (n_frames if n_frames is not None else offset + tracks.n_frames) - 1
     short = max(SHORT_FRAMES, SHORT_FRACTION * (last_frame + 1))
-    for row, track in enumerate(tracks.track_ids.tolist()):
-        columns = np.flatnonzero(present[row])
-        if columns.size == 0:
-            continue
-        first, last = tracks.first_frame + int(columns[0]), tracks.first_frame + int(columns[-1])
-        slave = tracks.interpolated[row]
-        run_starts = np.flatnonzero(slave & ~np.concatenate(([False], slave[:-1])))
-        for start in run_starts.tolist():
-            length = int(np.argmin(slave[start:])) if not slave[start:].all() else slave.size - start
-            places.append(_place(tracks.first_frame + start, track, "interpolated", INTERPOLATED_SCORE, f"{length} interpolated frame{'s' * (length != 1)}"))
-        if columns.size < short:
-            places.append(_place(first, track, "short", SHORT_SCORE, f"only {columns.size} frame{'s' * (columns.size != 1)}"))
-        if first > 0:
-            places.append(_place(first, track, "start", END_SCORE, f"starts at frame {first}"))
-        if last < last_frame:
-            places.append(_place(last, track, "end", END_SCORE, f"ends at frame {last}"))
+    # Runs of interpolated positions: where one starts and where it stops.
+    edges = np.diff(np.pad(slave, ((0, 0), (1, 1))).astype(np.int8), axis=1)
+    for (row, start), (_, stop) in zip(np.argwhere(edges == 1).tolist(), np.argwhere(edges == -1).tolist()):
+        length = stop - start
+        places.append(_place(offset + start, ids[row], "interpolated", INTERPOLATED_SCORE, f"{length} interpolated frame{'s' * (length != 1)}"))
+    rows = np.flatnonzero(present.any(axis=1))
+    length = present[rows].sum(axis=1)
+    first = offset + np.argmax(present[rows], axis=1)
+    last = offset + present.shape[1] - 1 - np.argmax(present[rows, ::-1], axis=1)
+    for row, count, start, end in zip(rows.tolist(), length.tolist(), first.tolist(), last.tolist()):
+        if count < short:
+            places.append(_place(start, ids[row], "short", SHORT_SCORE, f"only {count} frame{'s' * (count != 1)}"))
+        if start > 0:
+            places.append(_place(start, ids[row], "start", END_SCORE, f"starts at frame {start}"))
+        if end < last_frame:
+            places.append(_place(end, ids[row], "end", END_SCORE, f"ends at frame {end}"))
     places.sort(key=lambda place: (-place["score"], place["frame"], place["track"]))
     return places
 
