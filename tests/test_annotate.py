@@ -314,3 +314,20 @@ def test_ground_truth_from_nothing_by_clicks(browser, tmp_path):
     assert np.abs(made.xy - truth.xy).max() < 0.5, "each point where it was clicked, to half a pixel"
     assert main(["correct", str(out / "start.csv"), str(out / CORRECTIONS), "--out", str(tmp_path / "again.csv")]) == 0
     assert (tmp_path / "again.csv").read_bytes() == (out / TRACKS).read_bytes()
+
+
+def test_links_another_result_does_not_make_are_doubtful(dish):
+    folder, truth = dish
+    wrong = read_tracks(folder / "wrong.csv")
+    # A link elsewhere the tracks' own points cannot tell: only the second result shows it.
+    places = [p for p in doubtful_places(truth, other=wrong) if p["kind"] == "disagreement"]
+    assert {(p["frame"], p["track"]) for p in places} == {(frame, track) for a, b, frame in SWAPS for track in (a, b)}
+
+
+def test_bad_input_is_one_line_exit_2_and_no_folder(tmp_path, dish, capsys):
+    folder, _ = dish
+    for args in ([str(tmp_path / "missing.mp4")], [str(folder / "clip.mp4"), str(tmp_path / "missing.csv")], [str(folder / "clip.mp4"), "--port", "70000"]):
+        assert main(["annotate", *args, "--out", str(tmp_path / "out"), "--no-browser"]) == 2
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1 and error.startswith("seedtrack annotate: error:"), error
+        assert not (tmp_path / "out").exists()

@@ -8,6 +8,8 @@ Computed from what the tracks (and detections) hold, most doubtful first:
   one taken; the score is the ratio of the two distances (above 1: another point was nearer).
   Using the better of the two predictions keeps a wrong link from also casting doubt on the
   right link after it, whose velocity prediction the wrong one spoils;
+* a link another result (``other``) does not make: its two points are not both matched to
+  one and the same track of the other result (as ``seedtrack compare`` marks them);
 * a run of interpolated positions (a bound slave: no measurement supports it);
 * a short track;
 * a track that starts or ends inside the clip (an entry, an exit, or a broken track).
@@ -20,9 +22,12 @@ from scipy.spatial import cKDTree
 
 from seedtrack.tracking.tracks import Tracks
 
+from ..commands.compare import DEFAULT_TOLERANCE, disagreeing_links
+
 # A link is a close call when another point is at most this many times farther than its own.
 CLOSE_CALL_RATIO = 0.6
 # Fixed scores rank the other kinds between clear close calls and mild ones.
+DISAGREEMENT_SCORE = 0.95
 INTERPOLATED_SCORE = 0.9
 SHORT_SCORE = 0.8
 END_SCORE = 0.5
@@ -33,7 +38,13 @@ SHORT_FRACTION = 0.05
 SAME_POINT = 0.5
 
 
-def doubtful_places(tracks: Tracks, detections: list[np.ndarray] | None = None, n_frames: int | None = None) -> list[dict]:
+def doubtful_places(
+    tracks: Tracks,
+    detections: list[np.ndarray] | None = None,
+    n_frames: int | None = None,
+    other: Tracks | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+) -> list[dict]:
     """The places to review, most doubtful first.
 
     Parameters
@@ -44,12 +55,16 @@ def doubtful_places(tracks: Tracks, detections: list[np.ndarray] | None = None, 
         own points stand for them.
     n_frames : int, optional
         Frames in the clip (default: up to the last frame of the tracks).
+    other : Tracks, optional
+        A second result for the same clip: the links it does not make are doubtful.
+    tolerance : float
+        Distance within which points of ``other`` match points of ``tracks``, pixels.
 
     Returns
     -------
     list of dict
-        ``frame`` (0-based), ``track`` (id), ``kind`` (``close call``, ``interpolated``,
-        ``short``, ``start``, ``end``), ``score`` (higher is more doubtful) and ``text``.
+        ``frame`` (0-based), ``track`` (id), ``kind`` (``close call``, ``disagreement``,
+        ``interpolated``, ``short``, ``start``, ``end``), ``score`` (higher is more doubtful) and ``text``.
 
     Example
     -------
@@ -58,6 +73,10 @@ def doubtful_places(tracks: Tracks, detections: list[np.ndarray] | None = None, 
     [(2, 1, 'close call'), (2, 2, 'close call')]
     """
     places = _close_calls(tracks, detections)
+    if other is not None and tracks.n_tracks and other.n_tracks:
+        rows, columns = np.nonzero(disagreeing_links(tracks, other, tolerance))
+        for row, column in zip(rows.tolist(), columns.tolist()):
+            places.append(_place(tracks.first_frame + column, tracks.track_ids[row], "disagreement", DISAGREEMENT_SCORE, "the other result links it elsewhere"))
     present, slave, ids, offset = tracks.present, tracks.interpolated, tracks.track_ids, tracks.first_frame
     last_frame = (n_frames if n_frames is not None else offset + tracks.n_frames) - 1
     short = max(SHORT_FRAMES, SHORT_FRACTION * (last_frame + 1))

@@ -24,6 +24,7 @@ from urllib.parse import parse_qs, urlsplit
 import numpy as np
 
 from seedtrack.data.errors import DataError
+from seedtrack.tracking.tracks import Tracks
 
 from .doubt import doubtful_places
 from .frames import FrameCache
@@ -46,6 +47,8 @@ class AnnotateServer(ThreadingHTTPServer):
     detections : dict of str to ndarray, optional
         Columns ``frame`` (0-based), ``x``, ``y`` (pixels) of the detections to offer as click
         targets.
+    other : Tracks, optional
+        A second result for the clip; the links where it disagrees are doubtful places.
     host : str
     port : int
 
@@ -66,10 +69,11 @@ class AnnotateServer(ThreadingHTTPServer):
     daemon_threads = True
     allow_reuse_address = True
 
-    def __init__(self, session: Session, frames: FrameCache, detections: dict | None = None, host: str = "127.0.0.1", port: int = 0) -> None:
+    def __init__(self, session: Session, frames: FrameCache, detections: dict | None = None, other: Tracks | None = None, host: str = "127.0.0.1", port: int = 0) -> None:
         self.session = session
         self.frames = frames
         self.detections = detections
+        self.other = other
         self.token = secrets.token_urlsafe(24)
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
         self.address_family = family
@@ -120,7 +124,7 @@ class AnnotateServer(ThreadingHTTPServer):
             },
             "edits": [" ".join(str(value) for value in (edit.verb, *edit.arguments)) for edit in session.edits],
             "can_redo": session.can_redo,
-            "doubtful": doubtful_places(session.tracks, self._detected_frames, count),
+            "doubtful": doubtful_places(session.tracks, self._detected_frames, count, other=self.other),
         }
 
 

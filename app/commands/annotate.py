@@ -32,7 +32,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("tracks", type=Path, nargs="?", default=None, metavar="TRACKS", help="tracks to correct (any track format); none: track by hand")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder for corrections.txt and tracks.csv (an earlier session's edits there are resumed)")
     parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): points a click snaps to")
-    parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    parser.add_argument("--compare", type=Path, default=None, metavar="OTHER", help="a second result for INPUT (any track format): the links where it disagrees with TRACKS are doubtful places")
+    parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS and OTHER (default: from the extension and contents)")
     parser.add_argument("--host", default="127.0.0.1", metavar="H", help="address to listen on (default 127.0.0.1: this machine only)")
     parser.add_argument("--port", type=int, default=0, metavar="N", help="port to listen on (default: any free one)")
     parser.add_argument("--no-browser", action="store_true", help="print the address but do not open a browser")
@@ -44,11 +45,12 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--port must be in 0..65535, got {args.port}")
     start = read_tracks(args.tracks, args.format) if args.tracks is not None else Tracks.from_rows([], [], [], [])
     detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
+    other = read_tracks(args.compare, args.format) if args.compare is not None else None
     frames = FrameCache(args.input)
     with output_folder(args.out) as folder:
         session = Session(start, folder, args.tracks)
     try:
-        server = AnnotateServer(session, frames, detections, host=args.host, port=args.port)
+        server = AnnotateServer(session, frames, detections, other, host=args.host, port=args.port)
     except OSError as error:
         raise UsageError(f"cannot listen on {args.host}:{args.port} ({error.strerror})") from None
     print(server.url, flush=True)
