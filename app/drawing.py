@@ -387,6 +387,13 @@ def draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow
 
     ``groups`` holds each head's index into ``colours``. Rings are polygons drawn in one call per
     colour, which is much faster than a circle per head.
+
+    Example
+    -------
+    >>> canvas = np.zeros((40, 40, 3), np.uint8)
+    >>> draw_heads(canvas, np.array([[20.0, 20.0]]), np.array([0]), [(0, 255, 0)], np.array([False]), Style.for_size((640, 480)))
+    >>> int(canvas[20, 20, 1]), int(canvas[20, 26, 1]) > 100  # the centre left alone, the ring green
+    (0, True)
     """
     if not len(xy):
         return
@@ -413,7 +420,13 @@ def draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow
 
 
 def ring_radius(style: Style) -> float:
-    """Radius of the ring drawn around a head, pixels of the drawn frame."""
+    """Radius of the ring drawn around a head, pixels of the drawn frame.
+
+    Example
+    -------
+    >>> round(ring_radius(Style.for_size((640, 480))), 1)
+    5.6
+    """
     return style.radius * _RING
 
 
@@ -440,6 +453,13 @@ class Occupancy:
     ----------
     shape : tuple of int
         (height, width) of the picture, pixels.
+
+    Example
+    -------
+    >>> taken = Occupancy((100, 200))
+    >>> taken.take(10, 10, 20, 20)
+    >>> taken.free(15, 15, 30, 30), taken.free(40, 40, 50, 50)
+    (False, True)
     """
 
     CELL = 2
@@ -545,7 +565,14 @@ def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, fo
 
 
 def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
-    """(width, height) in pixels of ``text`` as :func:`draw_texts` writes it, halo included."""
+    """(width, height) in pixels of ``text`` as :func:`draw_texts` writes it, halo included.
+
+    Example
+    -------
+    >>> width, height = text_size("1524", 0.5)
+    >>> width > height > 10
+    True
+    """
     picture, _, _ = _halo(text, font, thickness)
     return picture.shape[1], picture.shape[0]
 
