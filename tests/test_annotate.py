@@ -331,3 +331,40 @@ def test_bad_input_is_one_line_exit_2_and_no_folder(tmp_path, dish, capsys):
         error = capsys.readouterr().err
         assert error.count("\n") == 1 and error.startswith("seedtrack annotate: error:"), error
         assert not (tmp_path / "out").exists()
+
+
+def test_jumps_in_a_video_give_the_frames_sequential_decoding_gives(tmp_path):
+    import av
+
+    # Key frames every 4 frames and B-frames, so that jumps seek and frames are reordered.
+    rng = np.random.default_rng(0)
+    with av.open(str(tmp_path / "gop.mp4"), "w") as container:
+        stream = container.add_stream("libx264", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.codec_context.gop_size = 4
+        stream.options = {"bf": "2", "keyint_min": "4", "sc_threshold": "0"}
+        for k in range(23):
+            image = np.full((48, 64, 3), 10 * k, np.uint8) + rng.integers(0, 9, (48, 64, 3), dtype=np.uint8)
+            for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="bgr24")):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    with av.open(str(tmp_path / "gop.mp4")) as container:
+        expected = [cv2_jpeg(frame.to_ndarray(format="bgr24")) for frame in container.decode(video=0)]
+    frames = FrameCache(tmp_path / "gop.mp4", capacity=1)
+    assert frames._seeker is not None and len(frames._seeker._keys) > 4, "this video's timestamps number its frames"
+    for index in (20, 3, 21, 22, 9, 0, 1, 17, 4, 5, 6):
+        assert frames.jpeg(index) == expected[index], index
+    frames.close()
+
+
+def cv2_jpeg(image):
+    import cv2
+
+    from seedtrack.annotate.frames import JPEG_QUALITY
+
+    return cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])[1].tobytes()
+
+
+def test_no_tracks_no_doubt():
+    assert doubtful_places(_empty(), n_frames=5) == []

@@ -87,8 +87,9 @@ def doubtful_places(
         places.append(_place(offset + start, ids[row], "interpolated", INTERPOLATED_SCORE, f"{length} interpolated frame{'s' * (length != 1)}"))
     rows = np.flatnonzero(present.any(axis=1))
     length = present[rows].sum(axis=1)
-    first = offset + np.argmax(present[rows], axis=1)
-    last = offset + present.shape[1] - 1 - np.argmax(present[rows, ::-1], axis=1)
+    # argmax refuses an empty axis, which a set without tracks has.
+    first = offset + (np.argmax(present[rows], axis=1) if rows.size else rows)
+    last = offset + present.shape[1] - 1 - (np.argmax(present[rows, ::-1], axis=1) if rows.size else rows)
     for row, count, start, end in zip(rows.tolist(), length.tolist(), first.tolist(), last.tolist()):
         if count < short:
             places.append(_place(start, ids[row], "short", SHORT_SCORE, f"only {count} frame{'s' * (count != 1)}"))
