@@ -368,3 +368,15 @@ def cv2_jpeg(image):
 
 def test_no_tracks_no_doubt():
     assert doubtful_places(_empty(), n_frames=5) == []
+
+
+def test_frames_of_an_image_folder(tmp_path):
+    import cv2
+
+    for k in range(4):
+        cv2.imwrite(str(tmp_path / f"img{k}.png"), np.full((8, 10, 3), 60 * k, np.uint8))
+    frames = FrameCache(tmp_path)
+    assert (frames.size, frames.frame_count) == ((10, 8), 4)
+    shades = [int(cv2.imdecode(np.frombuffer(frames.jpeg(k), np.uint8), cv2.IMREAD_GRAYSCALE).mean()) for k in (3, 1, 2, 0)]
+    assert [round(shade / 60) for shade in shades] == [3, 1, 2, 0]
+    frames.close()
