@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links
 from .motion import Candidates, CombinedModel, IndividualModel
-from .tracks import Tracks, check_limit, link_speed_limit, point_frames, tracks_from_assignment
+from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
 
@@ -265,11 +265,25 @@ def goa_pass(
 def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
     """First links of a self-initialising pass: one head per measurement of ``frames[0]``.
 
+    The links do not depend on the order of the rows within a frame (see
+    :func:`seedtrack.tracking.tracks.canonical_order`).
+
     Returns
     -------
     ndarray of int, shape (M_0, 2)
-        Each head's measurement in frames 0 and 1 (-1 where it gets a slave).
+        Each head's measurement in frames 0 and 1 (-1 where it gets a slave), head i on
+        measurement i of ``frames[0]``.
     """
+    frames = point_frames(frames)
+    order = canonical_order(frames)
+    second = _initial_links([f[o] for f, o in zip(frames, order)], config)[:, 1]
+    links = np.column_stack((np.arange(frames[0].shape[0]), np.full(frames[0].shape[0], UNASSIGNED)))
+    held = second != UNASSIGNED
+    links[order[0][held], 1] = order[1][second[held]]
+    return links
+
+
+def _initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
     first = np.arange(frames[0].shape[0])
     lookahead = 2 if config.initialisation == "im1" else config.lookahead
     head, measurement, cost = first_links(
@@ -298,7 +312,7 @@ def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig)
     if config.d_max is None:
         config = replace(config, d_max=link_speed_limit(tracks_from_assignment(list(frames), up)))
     unused = np.setdiff1d(np.arange(backwards[1].shape[0]), start[:, 1])
-    fresh = initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
+    fresh = _initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
     second = np.full(free.size, UNASSIGNED, dtype=start.dtype)
     linked = fresh[:, 1] != UNASSIGNED
     second[linked] = unused[fresh[linked, 1]]
@@ -310,6 +324,7 @@ def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig)
     return start
 
 
+@order_independent
 def goa(
     frames: Sequence[np.ndarray],
     initial: np.ndarray,
@@ -341,6 +356,7 @@ def goa(
     return tracks_from_assignment(frames, assignment, first_frame)
 
 
+@order_independent
 def goa_updown(
     frames: Sequence[np.ndarray],
     config: GOAConfig = GOAConfig(),
@@ -370,7 +386,7 @@ def goa_updown(
     if len(frames) < 2:
         assignment = np.arange(frames[0].shape[0])[:, None] if frames else np.empty((0, 0), np.int64)
         return tracks_from_assignment(frames, assignment, first_frame)
-    up = goa_pass(frames, initial_links(frames, config), config, progress)
+    up = goa_pass(frames, _initial_links(frames, config), config, progress)
     if progress is not None:
         progress(1)
     backwards = frames[::-1]

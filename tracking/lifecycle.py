@@ -24,10 +24,10 @@ import numpy as np
 
 from .assignment import UNASSIGNED
 from .gap_closing import close_gaps
-from .goa import GOAConfig, Progress, _HeadState, assign_step, goa_pass, initial_links
+from .goa import GOAConfig, Progress, _HeadState, _initial_links, assign_step, goa_pass
 from .initialisation import pairs_within
 from .motion import Candidates
-from .tracks import Tracks, point_frames, tracks_from_assignment
+from .tracks import Tracks, order_independent, point_frames, tracks_from_assignment
 
 # Next frames in which a track back from slaves must show that its motion continues.
 _CONTINUATION_FRAMES = 2
@@ -156,7 +156,7 @@ def _births(frames: Sequence[np.ndarray], free: list[np.ndarray], start: int, en
     if len(window) == 1:
         local = np.arange(window[0].shape[0])[:, None]
     else:
-        first = initial_links(ahead, config)
+        first = _initial_links(ahead, config)
         local = goa_pass(window, first[first[:, 1] != UNASSIGNED], config)
         local = local[(local != UNASSIGNED).all(axis=1)]
     rows = np.full((local.shape[0], len(frames)), UNASSIGNED, dtype=np.int64)
@@ -225,6 +225,7 @@ def _open(heads: _Heads, frames: Sequence[np.ndarray], free: list[np.ndarray], s
             free[k][rows[:, k]] = False
 
 
+@order_independent
 def goa_updown_open(
     frames: Sequence[np.ndarray],
     config: GOAConfig = GOAConfig(),

@@ -17,7 +17,7 @@ import numpy as np
 
 from .motion import Candidates, proximal_uniformity_cost
 from .nn import link_nearest
-from .tracks import NO_MEASUREMENT, Tracks, check_limit, point_frames
+from .tracks import NO_MEASUREMENT, Tracks, check_limit, order_independent, point_frames
 
 
 def greedy_conditioned_assignment(cost: np.ndarray) -> np.ndarray:
@@ -64,6 +64,7 @@ def greedy_conditioned_assignment(cost: np.ndarray) -> np.ndarray:
     return result
 
 
+@order_independent
 def rangarajan_shah(
     frames: Sequence[np.ndarray],
     d_max: float | None = None,

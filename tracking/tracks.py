@@ -7,7 +7,10 @@ renderers then become array expressions.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+import inspect
+from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
@@ -255,6 +258,73 @@ def point_frames(frames) -> list[np.ndarray]:
             raise ValueError(f"frame {k} holds a non-finite position")
         out.append(points)
     return out
+
+
+def canonical_order(frames: list[np.ndarray]) -> list[np.ndarray]:
+    """Per frame, the row order that sorts its points by x, then y.
+
+    Trackers break ties (two assignments of equal cost) by the order of the rows they are
+    given; tracking the points in this order, whatever order they came in, makes the result
+    independent of the order of the rows within a frame.
+
+    Parameters
+    ----------
+    frames : list of ndarray, each (M_k, 2)
+        Positions (x, y) per frame, pixels.
+
+    Returns
+    -------
+    list of ndarray of int, each (M_k,)
+        Input row of each sorted row.
+
+    Examples
+    --------
+    >>> canonical_order([np.array([[3.0, 1.0], [1.0, 5.0], [1.0, 2.0]])])[0]
+    array([2, 1, 0])
+    """
+    return [np.lexsort((f[:, 1], f[:, 0])) for f in frames]
+
+
+def in_input_order(tracks: "Tracks", order: list[np.ndarray]) -> "Tracks":
+    """``tracks`` found on frames reordered by ``order`` (:func:`canonical_order`), with its
+    measurement indices turned back into rows of the frames as given."""
+    measurement = tracks.measurement.copy()
+    for column, rows in enumerate(order):
+        held = measurement[:, column] != NO_MEASUREMENT
+        measurement[held, column] = rows[measurement[held, column]]
+    return replace(tracks, measurement=measurement)
+
+
+def order_independent(tracker: Callable[..., "Tracks"]) -> Callable[..., "Tracks"]:
+    """Wrap ``tracker(frames, ...) -> Tracks`` so that it tracks each frame's points sorted by
+    (x, y) and reports measurement indices into the frames as given; an ``initial`` argument
+    (measurement indices of given first links, (m, 2), -1 for none) is turned into the sorted
+    rows too.
+
+    The result then does not depend on the order of the rows within a frame: equal-cost
+    choices fall the same way whatever that order (issue 18: with no speed limit, a link that
+    costs exactly phi_max ties with a slave plus a false track, and the solver took whichever
+    came first).
+    """
+
+    signature = inspect.signature(tracker)
+
+    @functools.wraps(tracker)
+    def run(*args, **kwargs) -> Tracks:
+        bound = signature.bind(*args, **kwargs)
+        frames = point_frames(bound.arguments["frames"])
+        order = canonical_order(frames)
+        bound.arguments["frames"] = [f[o] for f, o in zip(frames, order)]
+        if bound.arguments.get("initial") is not None:
+            initial = np.array(bound.arguments["initial"], dtype=np.int64)
+            for column in range(min(initial.shape[1], len(order))):
+                rank = np.argsort(order[column])
+                held = initial[:, column] != NO_MEASUREMENT
+                initial[held, column] = rank[initial[held, column]]
+            bound.arguments["initial"] = initial
+        return in_input_order(tracker(*bound.args, **bound.kwargs), order)
+
+    return run
 
 
 def check_limit(name: str, value: float | None, optional: bool = True) -> float | None:
