@@ -64,6 +64,51 @@ class Candidates:
         )
 
 
+@dataclass(frozen=True)
+class SpeedLimits:
+    """The speed gate that every GOA link passes: d_min <= gap-normalised speed <= d_max.
+
+    Also the scale of the IM1 fallback (heads without a velocity, and the first links): the
+    speed that costs phi_max, which is d_max, or without one the fastest candidate of the
+    step (at least 1 pixel/frame).
+
+    Attributes
+    ----------
+    d_min : float
+        Smallest speed, pixels/frame.
+    d_max : float or None
+        Largest speed, pixels/frame; None for no limit.
+
+    Examples
+    --------
+    >>> SpeedLimits(d_max=5.0).admits(np.array([[3.0, 4.0], [3.0, 4.1]]))
+    array([ True, False])
+    """
+
+    d_min: float = 0.0
+    d_max: float | None = None
+
+    def admits(self, velocity: np.ndarray) -> np.ndarray:
+        """Boolean (P,): the velocities (P, 2), pixels/frame, whose speed is within the limits."""
+        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        ok = speed >= self.d_min
+        if self.d_max is not None:
+            ok &= speed <= self.d_max
+        return ok
+
+    def reach(self, radius: np.ndarray) -> np.ndarray:
+        """A model's gate radius (pixels/frame per head) capped at d_max."""
+        return radius if self.d_max is None else np.minimum(radius, self.d_max)
+
+    def scale(self, velocity: np.ndarray) -> float:
+        """Speed that costs phi_max under the IM1 fallback, pixels/frame: d_max, or the fastest
+        of the velocities (P, 2) given, at least 1."""
+        if self.d_max is not None:
+            return float(self.d_max)
+        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        return max(float(speed.max(initial=0.0)), 1.0)
+
+
 def nearest_neighbour_cost(candidates: Candidates, scale: float) -> np.ndarray:
     """IM1: gap-normalised distance divided by ``scale``.
 
@@ -294,3 +339,27 @@ def _mean_of_others(cost: np.ndarray, group: np.ndarray) -> np.ndarray:
     totals = np.bincount(inverse, weights=cost)
     others = counts[inverse] - 1
     return np.divide(totals[inverse] - cost, others, out=np.zeros_like(cost), where=others > 0)
+
+
+def acceptable_links(
+    model: IndividualModel, candidates: Candidates, phi_max: float, limits: SpeedLimits
+) -> tuple[Candidates, np.ndarray]:
+    """The candidate links that pass the speed gate and cost at most phi_max, with their cost.
+
+    Parameters
+    ----------
+    model : IndividualModel
+    candidates : Candidates
+    phi_max : float
+        Largest individual cost of a link.
+    limits : SpeedLimits
+        The speed gate, and the scale of the IM1 fallback (taken over the pairs it admits).
+
+    Returns
+    -------
+    Candidates, ndarray of float (P',)
+    """
+    candidates = candidates.subset(limits.admits(candidates.velocity))
+    cost = model.cost(candidates, phi_max, limits.scale(candidates.velocity))
+    keep = cost <= phi_max
+    return candidates.subset(keep), cost[keep]

@@ -227,7 +227,7 @@ def track_points(points: Points, args: argparse.Namespace) -> Tracks:
     if args.algorithm == "goa":
 
         def track(moved: list[np.ndarray], config: GOAConfig) -> Tracks:
-            with progress_bar(len(moved) - 2, "tracking", unit="step") as bar:
+            with progress_bar(len(moved) - 1, "tracking", unit="step") as bar:
                 return goa(moved, initial_links(moved, config), config, first, progress=bar.update)
 
     else:
