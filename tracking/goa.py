@@ -31,6 +31,18 @@ from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acc
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
+# One frame's assignment by name: per connected component of the gated graph, or the paper's
+# whole augmented matrix (for checking).
+SOLVERS: dict[str, Callable[..., np.ndarray]] = {"split": solve_split, "dense": solve_dense}
+# Weight of the false-track/slave block, in units of the unmatched weight (see GOAConfig.corner).
+_CORNERS = {"phi": 1.0, "zero": 0.0}
+# Frames that score the first links: "im1" the first link alone, "lookahead" config.lookahead.
+_FIRST_LINK_FRAMES = {"im1": 2, "lookahead": None}
+
+
+def _check_choice(name: str, value: str, choices: dict) -> None:
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -105,16 +117,13 @@ class GOAConfig:
         check_limit("d_max", self.d_max)
         if self.d_min < 0 or (self.d_max is not None and self.d_min >= self.d_max):
             raise ValueError(f"d_min must be non-negative and below d_max, got {self.d_min}")
-        if self.corner not in ("zero", "phi"):
-            raise ValueError(f"corner must be 'zero' or 'phi', got {self.corner!r}")
-        if self.initialisation not in ("lookahead", "im1"):
-            raise ValueError(f"initialisation must be 'lookahead' or 'im1', got {self.initialisation!r}")
+        _check_choice("corner", self.corner, _CORNERS)
+        _check_choice("initialisation", self.initialisation, _FIRST_LINK_FRAMES)
         if self.lookahead < 3:
             raise ValueError(f"lookahead must span at least 3 frames, got {self.lookahead}")
         if self.neighbours < 1:
             raise ValueError(f"neighbours must be at least 1, got {self.neighbours}")
-        if self.solver not in ("split", "dense"):
-            raise ValueError(f"solver must be 'split' or 'dense', got {self.solver!r}")
+        _check_choice("solver", self.solver, SOLVERS)
 
     @property
     def unmatched_weight(self) -> float:
@@ -122,7 +131,7 @@ class GOAConfig:
 
     @property
     def corner_weight(self) -> float:
-        return 0.0 if self.corner == "zero" else self.unmatched_weight
+        return _CORNERS[self.corner] * self.unmatched_weight
 
     @property
     def speed(self) -> SpeedLimits:
@@ -232,8 +241,7 @@ def solve(config: GOAConfig, n_heads: int, n_measurements: int, head: np.ndarray
         Measurement index per head, -1 for a slave.
     """
     weight = config.combined.weights(cost, head, measurement)
-    solver = solve_split if config.solver == "split" else solve_dense
-    return solver(n_heads, n_measurements, head, measurement, weight, config.unmatched_weight, config.corner_weight)
+    return SOLVERS[config.solver](n_heads, n_measurements, head, measurement, weight, config.unmatched_weight, config.corner_weight)
 
 
 def assign_step(state: HeadState, step: int, points: np.ndarray, config: GOAConfig) -> np.ndarray:
@@ -296,7 +304,7 @@ def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray
 
 
 def _initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
-    lookahead = 2 if config.initialisation == "im1" else config.lookahead
+    lookahead = _FIRST_LINK_FRAMES[config.initialisation] or config.lookahead
     head, measurement, cost = first_links(frames, config.individual, config.phi_max, config.speed, config.neighbours, lookahead)
     keep = cost <= config.phi_max
     second = solve(config, frames[0].shape[0], frames[1].shape[0], head[keep], measurement[keep], cost[keep])

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .motion import Candidates, IndividualModel, SpeedLimits, smooth_motion_cost
+from .motion import Candidates, IndividualModel, NearestNeighbour, SmoothMotion, SpeedLimits, smooth_motion_cost
 
 # Cost of a slave on a first-link path, as a share of phi_max.
 _SLAVE_SHARE = 0.15
@@ -28,7 +28,7 @@ _CONTINUATIONS = 3
 # seeds): share 0 -> 0.051 / 0.111, 0.2 -> 0.047 / 0.045, 0.5 -> 0.047 / 0.045; the dishes stay
 # 80/80 up to 0.5 and fail at 1 (the paper's IM1 alone).
 _NEAREST_SHARE = 0.3
-_LINEAR_IM1 = IndividualModel("im1")
+_LINEAR_IM1 = NearestNeighbour()
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -58,8 +58,8 @@ def first_links(
     frames : sequence of ndarray, each (M_k, 2)
         Measurement positions, pixels, in processing order; at least 2 frames.
     model : IndividualModel
-        Scores each triplet; an order-1 model is replaced by IM2 with default weights, since a
-        triplet needs a velocity.
+        Scores each triplet by smooth motion: IM2 with its weights, any other model is replaced
+        by IM2 with default weights.
     phi_max : float
         Largest cost of any triplet on a path.
     limits : SpeedLimits
@@ -86,8 +86,8 @@ def first_links(
         possible but loses to smooth alternatives.
     """
     link_model = model
-    if model.order == 1:
-        model = IndividualModel("im2")
+    if not isinstance(model, SmoothMotion):
+        model = SmoothMotion()
     if slave_cost is None:
         slave_cost = _SLAVE_SHARE * phi_max
     horizon = min(lookahead, len(frames))

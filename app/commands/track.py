@@ -13,7 +13,7 @@ from seedtrack.data.csvio import TRACK_COLUMNS, read_table, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig, goa, initial_links
 from seedtrack.tracking.lifecycle import drop_short
-from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, CombinedModel, IndividualModel
 from seedtrack.tracking.trackers import TRACKERS, run_tracker
 from seedtrack.tracking.tracks import Tracks
 
@@ -100,13 +100,13 @@ def add_parser(subparsers) -> None:
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
-        choices=("im1", "im2", "im3"),
+        choices=tuple(INDIVIDUAL_MODELS),
         default=None,
         help="cost of one link: im1 nearest neighbour, im2 smooth motion (default), im3 proximal uniformity",
     )
     group.add_argument(
         "--combined-model",
-        choices=("cm1", "cm2"),
+        choices=tuple(COMBINED_MODELS),
         default=None,
         help="how link costs add up in a frame: cm1 sum (default), cm2 conditioned on competitors",
     )
