@@ -210,14 +210,10 @@ def drop_short(tracks: Tracks, min_length: int) -> Tracks:
     ----------
     tracks : Tracks
     min_length : int
-        Frames; 0 or 1 keeps every track.
+        Frames; 0 or 1 keeps every track that has a position.
     """
-    present = tracks.present
-    frame = np.arange(tracks.n_frames)
-    first = np.where(present, frame, tracks.n_frames).min(axis=1)
-    last = np.where(present, frame, -1).max(axis=1)
-    keep = last - first + 1 >= min_length
-    return Tracks(tracks.xy[keep], tracks.measurement[keep], tracks.first_frame, tracks.track_ids[keep])
+    first, last = tracks.spans()
+    return tracks.select((last >= first) & (last - first + 1 >= min_length))
 
 
 __all__ = ["LifecycleConfig", "OpenTracks", "EndTracks", "goa_updown_open", "drop_short"]

@@ -244,7 +244,7 @@ def track_points(points: Points, args: argparse.Namespace) -> Tracks:
 def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
     """The columns of tracks.csv: the track columns, then the kept columns (blank when interpolated)."""
     rows = tracks.to_rows()
-    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
+    measurement = tracks.point_measurement  # same row order as to_rows
     column = rows["frame"] - tracks.first_frame
     rows["frame"] = tracks.first_frame + column * points.frame_step
     measured = measurement >= 0
