@@ -295,7 +295,7 @@ def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray
         measurement i of ``frames[0]``.
     """
     frames = point_frames(frames)
-    order = canonical_order(frames)
+    order = [np.arange(f.shape[0]) if o is None else o for f, o in zip(frames, canonical_order(frames))]
     second = _initial_links([f[o] for f, o in zip(frames, order)], config)[:, 1]
     links = np.column_stack((np.arange(frames[0].shape[0]), np.full(frames[0].shape[0], UNASSIGNED)))
     held = second != UNASSIGNED

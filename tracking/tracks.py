@@ -258,13 +258,16 @@ def _from_measured(
     """Tracks from their measured points (sorted by track, then column), with the inner gaps
     filled on straight lines.
 
-    The filled points are placed between their neighbours directly rather than sorted in: at a
-    million points every full-size temporary costs 8 to 16 MB.
+    Positions are gathered frame by frame and the filled points placed between their neighbours
+    directly rather than sorted in: at a million points every full-size temporary costs 8 to 16 MB.
     """
-    offset = np.concatenate(([0], np.cumsum([f.shape[0] for f in frames]))).astype(np.int64)
-    everything = np.concatenate([np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]) if frames else np.empty((0, 2))
-    xy = everything[offset[column] + index]
-    del everything
+    xy = np.empty((track.size, 2))
+    by_column = np.argsort(column, kind="stable")
+    bounds = np.concatenate(([0], np.cumsum(np.bincount(column, minlength=len(frames)))))
+    for k, points in enumerate(frames):
+        rows = by_column[bounds[k] : bounds[k + 1]]
+        xy[rows] = np.asarray(points, dtype=float).reshape(-1, 2)[index[rows]]
+    del by_column
     # A gap between consecutive measured points of one track is filled by gap - 1 points.
     gap = np.diff(column)
     inner = np.flatnonzero((np.diff(track) == 0) & (gap > 1))
@@ -388,8 +391,8 @@ def point_frames(frames) -> list[np.ndarray]:
     return out
 
 
-def canonical_order(frames: list[np.ndarray]) -> list[np.ndarray]:
-    """Per frame, the row order that sorts its points by x, then y.
+def canonical_order(frames: list[np.ndarray]) -> list[np.ndarray | None]:
+    """Per frame, the row order that sorts its points by x, then y (None where they already are).
 
     Trackers break ties (two assignments of equal cost) by the order of the rows they are
     given; tracking the points in this order, whatever order they came in, makes the result
@@ -402,25 +405,34 @@ def canonical_order(frames: list[np.ndarray]) -> list[np.ndarray]:
 
     Returns
     -------
-    list of ndarray of int, each (M_k,)
-        Input row of each sorted row.
+    list of (ndarray of int, each (M_k,), or None)
+        Input row of each sorted row; None for a frame in that order already (as ``seedtrack
+        track`` gives them), which then needs no copy.
 
     Examples
     --------
-    >>> canonical_order([np.array([[3.0, 1.0], [1.0, 5.0], [1.0, 2.0]])])[0]
-    array([2, 1, 0])
+    >>> canonical_order([np.array([[3.0, 1.0], [1.0, 5.0], [1.0, 2.0]]), np.array([[1.0, 2.0], [1.0, 3.0]])])
+    [array([2, 1, 0]), None]
     """
-    return [np.lexsort((f[:, 1], f[:, 0])) for f in frames]
+    return [None if _is_sorted(f) else np.lexsort((f[:, 1], f[:, 0])) for f in frames]
 
 
-def in_input_order(tracks: "Tracks", order: list[np.ndarray]) -> "Tracks":
+def _is_sorted(points: np.ndarray) -> bool:
+    dx = np.diff(points[:, 0])
+    return bool((dx >= 0).all() and (np.diff(points[:, 1])[dx == 0] >= 0).all())
+
+
+def in_input_order(tracks: "Tracks", order: list[np.ndarray | None]) -> "Tracks":
     """``tracks`` found on frames reordered by ``order`` (:func:`canonical_order`), with its
     measurement indices turned back into rows of the frames as given."""
+    if all(rows is None for rows in order):
+        return tracks
+    sizes = np.array([0 if rows is None else rows.size for rows in order], dtype=np.int64)
+    everything = np.concatenate([rows for rows in order if rows is not None])
+    start = np.concatenate(([0], np.cumsum(sizes)))
     measurement = tracks.point_measurement.copy()
-    held = measurement != NO_MEASUREMENT
-    sizes = np.array([rows.size for rows in order], dtype=np.int64)
-    everything = np.concatenate(order) if order else np.empty(0, np.int64)
-    measurement[held] = everything[np.concatenate(([0], np.cumsum(sizes)))[tracks.point_column[held]] + measurement[held]]
+    moved = (measurement != NO_MEASUREMENT) & (sizes[tracks.point_column] > 0)
+    measurement[moved] = everything[start[tracks.point_column[moved]] + measurement[moved]]
     return replace(tracks, point_measurement=measurement)
 
 
@@ -443,13 +455,14 @@ def order_independent(tracker: Callable[..., "Tracks"]) -> Callable[..., "Tracks
         bound = signature.bind(*args, **kwargs)
         frames = point_frames(bound.arguments["frames"])
         order = canonical_order(frames)
-        bound.arguments["frames"] = [f[o] for f, o in zip(frames, order)]
+        bound.arguments["frames"] = [f if o is None else f[o] for f, o in zip(frames, order)]
         if bound.arguments.get("initial") is not None:
             initial = np.array(bound.arguments["initial"], dtype=np.int64)
             for column in range(min(initial.shape[1], len(order))):
-                rank = np.argsort(order[column])
-                held = initial[:, column] != NO_MEASUREMENT
-                initial[held, column] = rank[initial[held, column]]
+                if order[column] is not None:
+                    rank = np.argsort(order[column])
+                    held = initial[:, column] != NO_MEASUREMENT
+                    initial[held, column] = rank[initial[held, column]]
             bound.arguments["initial"] = initial
         return in_input_order(tracker(*bound.args, **bound.kwargs), order)
 
