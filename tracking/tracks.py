@@ -248,48 +248,30 @@ def tracks_from_assignment(
     first_frame : int
         0-based frame index of ``frames[0]``.
     """
-    track, column = np.nonzero(assignment != NO_MEASUREMENT)
-    return _from_measured(frames, assignment.shape[0], track, column, assignment[track, column], first_frame)
-
-
-def _from_measured(
-    frames: list[np.ndarray], n_tracks: int, track: np.ndarray, column: np.ndarray, index: np.ndarray, first_frame: int
-) -> Tracks:
-    """Tracks from their measured points (sorted by track, then column), with the inner gaps
-    filled on straight lines.
-
-    Positions are gathered frame by frame and the filled points placed between their neighbours
-    directly rather than sorted in: at a million points every full-size temporary costs 8 to 16 MB.
-    """
+    # Every cell from a track's first to its last measurement is a point, in (track, frame)
+    # order; the points are found and filled in place, with no full-size temporary beyond the
+    # result and one index per cell.
+    held = assignment != NO_MEASUREMENT
+    present = np.logical_or.accumulate(held, axis=1) & np.logical_or.accumulate(held[:, ::-1], axis=1)[:, ::-1]
+    del held
+    track, column = np.nonzero(present)
+    measurement = assignment[track, column].astype(np.int64)
+    position = np.cumsum(present.ravel()).reshape(present.shape) - 1
+    del present
     xy = np.empty((track.size, 2))
-    by_column = np.argsort(column, kind="stable")
-    bounds = np.concatenate(([0], np.cumsum(np.bincount(column, minlength=len(frames)))))
     for k, points in enumerate(frames):
-        rows = by_column[bounds[k] : bounds[k + 1]]
-        xy[rows] = np.asarray(points, dtype=float).reshape(-1, 2)[index[rows]]
-    del by_column
-    # A gap between consecutive measured points of one track is filled by gap - 1 points.
-    gap = np.diff(column)
-    inner = np.flatnonzero((np.diff(track) == 0) & (gap > 1))
-    if inner.size == 0:
-        return Tracks(len(frames), track, column, xy, index, np.zeros(track.size, bool), first_frame, np.arange(n_tracks))
-    count = gap[inner] - 1
-    shift = np.zeros(track.size, np.int64)
-    shift[inner + 1] = count
-    position = np.arange(track.size) + np.cumsum(shift)
-    total = track.size + int(count.sum())
-    before = np.repeat(inner, count)
-    step = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 1
-    filled = position[before] + step
-    out_track, out_column = np.empty(total, np.int64), np.empty(total, np.int64)
-    out_xy, out_index = np.empty((total, 2)), np.full(total, NO_MEASUREMENT, np.int64)
-    interpolated = np.ones(total, bool)
-    out_track[position], out_column[position], out_xy[position], out_index[position] = track, column, xy, index
-    interpolated[position] = False
-    out_track[filled], out_column[filled] = track[before], column[before] + step
-    fraction = (step / np.repeat(gap[inner], count))[:, None]
-    out_xy[filled] = xy[before] + fraction * (xy[before + 1] - xy[before])
-    return Tracks(len(frames), out_track, out_column, out_xy, out_index, interpolated, first_frame, np.arange(n_tracks))
+        rows = np.flatnonzero(assignment[:, k] != NO_MEASUREMENT)
+        xy[position[rows, k]] = np.asarray(points, dtype=float).reshape(-1, 2)[assignment[rows, k]]
+    del position
+    interpolated = measurement == NO_MEASUREMENT
+    filled = np.flatnonzero(interpolated)
+    if filled.size:
+        measured = np.flatnonzero(~interpolated)
+        after = np.searchsorted(measured, filled)
+        start, end = measured[after - 1], measured[after]
+        fraction = ((column[filled] - column[start]) / (column[end] - column[start]))[:, None]
+        xy[filled] = xy[start] + fraction * (xy[end] - xy[start])
+    return Tracks(len(frames), track, column, xy, measurement, interpolated, first_frame, np.arange(assignment.shape[0]))
 
 
 def tracks_from_links(
@@ -335,20 +317,13 @@ def tracks_from_links(
         raise ValueError("a measurement has two successors or two predecessors")
 
     current = np.flatnonzero(~has_predecessor)  # global ids are already in (frame, index) order
-    n_tracks = current.size
-    row = np.arange(n_tracks)
-    rows, points = [], []
+    assignment = np.full((current.size, len(frames)), NO_MEASUREMENT, dtype=np.int64)
+    row = np.arange(current.size)
     while current.size:
-        rows.append(row)
-        points.append(current)
+        assignment[row, frame_of[current]] = index_of[current]
         more = successor[current] >= 0
         row, current = row[more], successor[current[more]]
-    track = np.concatenate(rows) if rows else np.empty(0, np.int64)
-    point = np.concatenate(points) if points else np.empty(0, np.int64)
-    # Along a chain frames increase, so (track, frame) sorts the points of each track in order.
-    order = np.lexsort((frame_of[point], track))
-    track, point = track[order], point[order]
-    return _from_measured(frames, n_tracks, track, frame_of[point], index_of[point], first_frame)
+    return tracks_from_assignment(frames, assignment, first_frame)
 
 
 def link_speed_limit(tracks: Tracks) -> float:
