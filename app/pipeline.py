@@ -266,7 +266,7 @@ def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], n
     ([0, 0, 1, 1], [1, 2, 3, 0])
     """
     rows = tracks.to_rows()
-    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
+    measurement = tracks.point_measurement  # same row order as to_rows
     column = rows["frame"] - tracks.first_frame
     rows["frame"] = tracks.first_frame + column * points.frame_step
     measured = measurement >= 0

@@ -309,7 +309,7 @@ def make_dish_scene(spec: DishSpec) -> DishScene:
     measurement = np.where(visible, np.arange(spec.seeds)[:, None], NO_MEASUREMENT)
     return DishScene(
         spec=spec,
-        truth=Tracks(xy=xy, measurement=measurement),
+        truth=Tracks.from_dense(xy=xy, measurement=measurement),
         visible=visible,
         centre=(float(centre[0]), float(centre[1])),
         radius=float(radius),

@@ -126,7 +126,7 @@ def generate_psmg(spec: PSMGSpec) -> tuple[list[np.ndarray], Tracks]:
         order = rng.permutation(seen.size)
         frames.append(paths[seen[order], k])
         measurement[seen[order], k] = np.arange(seen.size)
-    return frames, Tracks(xy=paths, measurement=measurement)
+    return frames, Tracks.from_dense(xy=paths, measurement=measurement)
 
 
 def _paths_in_view(rng: np.random.Generator, spec: PSMGSpec) -> np.ndarray:

@@ -73,4 +73,4 @@ def generate_walkers(spec: WalkerSpec) -> tuple[list[np.ndarray], Tracks]:
         frames.append(xy[who, k])
     xy = np.where(inside[..., None], xy, np.nan)
     ever = inside.any(axis=1)
-    return frames, Tracks(xy[ever], measurement[ever])
+    return frames, Tracks.from_dense(xy[ever], measurement[ever])

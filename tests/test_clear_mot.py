@@ -18,7 +18,7 @@ def _truth(rng, n_tracks, n_frames):
         if end - begin >= 2 and rng.random() < 0.4:
             xy[row, :begin] = np.nan
             xy[row, end:] = np.nan
-    return Tracks(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), first_frame=3)
+    return Tracks.from_dense(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), first_frame=3)
 
 
 def _result(rng, truth, swaps, drop, false_tracks, late_frames):
@@ -35,7 +35,7 @@ def _result(rng, truth, swaps, drop, false_tracks, late_frames):
     ids = rng.choice(10_000, xy.shape[0], replace=False)
     # A result that starts late: its first frames are missing, and its frames must stay aligned.
     xy = xy[:, late_frames:]
-    return Tracks(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), first_frame=truth.first_frame + late_frames, track_ids=ids)
+    return Tracks.from_dense(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), first_frame=truth.first_frame + late_frames, track_ids=ids)
 
 
 def _motmetrics(result, truth, tolerance):

@@ -23,7 +23,7 @@ def _lines(n_frames=6):
     """Three true tracks moving right on separate rows y = 0, 100, 200."""
     frame = np.arange(n_frames, dtype=float)
     xy = np.stack([np.stack([10 * frame, np.full(n_frames, 100.0 * row)], axis=1) for row in range(3)])
-    return Tracks(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), track_ids=np.array([10, 20, 30]))
+    return Tracks.from_dense(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), track_ids=np.array([10, 20, 30]))
 
 
 def _swapped():
@@ -32,7 +32,7 @@ def _swapped():
     xy = truth.xy.copy()
     xy[[0, 1], 3:] = xy[[1, 0], 3:]
     xy[2, 4:] = np.nan
-    return Tracks(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), track_ids=np.array([1, 2, 3]))
+    return Tracks.from_dense(xy=xy, measurement=np.zeros(xy.shape[:2], dtype=np.int64), track_ids=np.array([1, 2, 3]))
 
 
 def test_first_errors_say_where_and_to_what():

@@ -16,7 +16,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.frames import open_frames
 from seedtrack.data.psmg import generate_psmg
 from seedtrack.detection.blobs import BlobOptions, detect_blobs
-from seedtrack.tracking.gap_closing import close_gaps
+from seedtrack.tracking.gap_closing import join_track_ends
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
 from seedtrack.tracking.metrics import score_tracks
@@ -81,7 +81,7 @@ def test_gap_closing_joins_an_end_to_the_start_that_continues_its_motion():
     before[0, :5] = 0  # RIGHT up to frame 4
     before[1, 8:] = 0  # RIGHT from frame 8 (listed first in each frame)
     before[2, 8:] = 1  # the decoy
-    joined = close_gaps(frames, before, GOAConfig(), max_gap=3)
+    joined = join_track_ends(frames, before, GOAConfig(), max_gap=3)
     assert joined.tolist() == [np.concatenate((before[0, :8], before[1, 8:])).tolist(), before[2].tolist()]
 
 

@@ -1,7 +1,20 @@
+from dataclasses import dataclass
+from typing import ClassVar
+
 import numpy as np
 import pytest
 
-from seedtrack.tracking.motion import CombinedModel, IndividualModel, smooth_motion_cost, smooth_motion_speed_ratio_limit
+from seedtrack.tracking.goa import GOAConfig, goa
+from seedtrack.tracking.motion import (
+    INDIVIDUAL_MODELS,
+    CombinedModel,
+    GeneralisedMean,
+    IndividualModel,
+    NearestNeighbour,
+    SmoothMotion,
+    smooth_motion_cost,
+    smooth_motion_speed_ratio_limit,
+)
 
 
 def test_im2_is_zero_for_unchanged_motion_and_grows_with_turning():
@@ -52,3 +65,31 @@ def test_model_names_are_checked():
         IndividualModel("im9")
     with pytest.raises(ValueError, match="combined model"):
         CombinedModel("cm3")
+
+
+def test_a_model_is_built_by_its_registered_name_and_a_new_one_needs_only_a_subclass():
+    assert IndividualModel("im1", power=2) == NearestNeighbour(power=2)
+    assert isinstance(IndividualModel(), SmoothMotion) and isinstance(CombinedModel(), GeneralisedMean)
+    with pytest.raises(ValueError, match="im1"):
+        NearestNeighbour(name="im2")
+
+    @dataclass(frozen=True)
+    class Still(IndividualModel, key="still"):
+        """Cost = distance in pixels, whatever the scale."""
+
+        name: str = "still"
+        order: ClassVar[int] = 1
+
+        def cost(self, candidates, phi_max, d_max):
+            return np.hypot(*candidates.velocity.T)
+
+    try:
+        assert "still" in INDIVIDUAL_MODELS
+        frames = [np.array([[0.0, 0.0], [10.0, 0.0]]), np.array([[0.05, 0.0], [10.0, 0.05]]), np.array([[0.25, 0.0], [10.0, 0.1]])]
+        # Steps of 0.2 px and 0.05 px: IM1 against d_max 1 takes both, this model only the
+        # second (phi_max is 0.1 px here).
+        given = np.array([[0, 0], [1, 1]])
+        assert goa(frames, given, GOAConfig(individual=IndividualModel("im1"), d_max=1.0)).measurement[:, 2].tolist() == [0, 1]
+        assert goa(frames, given, GOAConfig(individual=IndividualModel("still"), d_max=1.0)).measurement[:, 2].tolist() == [-1, 1]
+    finally:
+        del INDIVIDUAL_MODELS["still"]

@@ -109,7 +109,7 @@ def test_tracks_are_found_without_the_drift_and_returned_with_it():
     def track(moved):
         seen.extend(moved)
         xy = np.stack([f[0] for f in moved])[None]
-        return Tracks(xy, np.zeros((1, len(moved)), np.int64))
+        return Tracks.from_dense(xy, np.zeros((1, len(moved)), np.int64))
 
     tracks = track_without_drift(frames, (3.0, 0.0), track)
     assert all(np.array_equal(f, [[10.0, 5.0]]) for f in seen)

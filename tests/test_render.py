@@ -154,7 +154,7 @@ def test_view_maps_pixel_centres_to_pixel_centres():
 
 def test_false_detections_are_those_no_measured_point_holds():
     xy = np.array([[[10.0, 10.0], [12.0, 10.0], [14.0, 10.0]]])
-    tracks = Tracks(xy=xy, measurement=np.array([[0, -1, 0]]), first_frame=4)
+    tracks = Tracks.from_dense(xy=xy, measurement=np.array([[0, -1, 0]]), first_frame=4)
     # Frame 5's point is interpolated, so the detection there belongs to no track.
     frame = np.array([4, 5, 5, 6, 6])
     x = np.array([10.0, 12.0, 30.0, 14.0, 10.0])
@@ -178,7 +178,7 @@ def test_detections_option_crosses_out_false_detections(clip, tmp_path, capsys):
 
 
 def test_frames_are_drawn_alike_at_any_size():
-    tracks = Tracks(xy=np.array([[[100.0, 100.0], [110.0, 104.0]]]), measurement=np.zeros((1, 2), int))
+    tracks = Tracks.from_dense(xy=np.array([[[100.0, 100.0], [110.0, 104.0]]]), measurement=np.zeros((1, 2), int))
     coverage = []
     for size in ((640, 480), (3840, 2160)):
         view = View.of((640, 480), scale=size[0] / 640)
@@ -227,7 +227,7 @@ def swapped(truth: Tracks, frame: int) -> Tracks:
     """The truth with the first two tracks exchanging identities from ``frame`` on."""
     xy = truth.xy.copy()
     xy[[0, 1], frame:] = xy[[1, 0], frame:]
-    return Tracks(xy=xy, measurement=truth.measurement.copy(), first_frame=truth.first_frame, track_ids=truth.track_ids)
+    return Tracks.from_dense(xy=xy, measurement=truth.measurement.copy(), first_frame=truth.first_frame, track_ids=truth.track_ids)
 
 
 def test_disagreeing_links_are_exactly_the_swapped_ones(clip):
@@ -287,7 +287,7 @@ def test_tracks_with_missing_frames_are_linked_across_the_gap():
     xy = np.full((2, 5, 2), np.nan)
     xy[0, [0, 2, 4]] = [[10, 10], [20, 10], [30, 10]]
     xy[1, [1, 2]] = [[50, 40], [52, 40]]
-    layer = TrackLayer(Tracks(xy=xy, measurement=np.zeros((2, 5), int)), View.of((64, 48)), trail=4)
+    layer = TrackLayer(Tracks.from_dense(xy=xy, measurement=np.zeros((2, 5), int)), View.of((64, 48)), trail=4)
     rows, ends, points = layer.segments(0, 4)
     assert sorted(zip(rows.tolist(), ends.tolist())) == [(0, 2), (0, 4), (1, 2)]
     starts = {(row, end): tuple(point[0] / 16) for row, end, point in zip(rows, ends, points)}
@@ -298,7 +298,7 @@ def test_disagreement_across_a_gap():
     xy = np.full((2, 5, 2), np.nan)
     xy[0, [0, 2, 4]] = [[10, 10], [20, 10], [30, 10]]
     xy[1, [0, 2, 4]] = [[10, 30], [20, 30], [30, 30]]
-    truth = Tracks(xy=xy, measurement=np.zeros((2, 5), int))
+    truth = Tracks.from_dense(xy=xy, measurement=np.zeros((2, 5), int))
     wrong = swapped(truth, 4)
     expected = np.zeros((2, 5), bool)
     expected[:, 4] = True

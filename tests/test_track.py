@@ -31,7 +31,7 @@ def scene(tmp_path_factory):
     shuffle = np.random.default_rng(0).permutation(frame.size)
     columns = {"label": label, "frame": frame, "x": xy[:, 0], "y": xy[:, 1]}
     write_table(folder / "points.csv", {name: values[shuffle] for name, values in columns.items()})
-    write_table(folder / "truth.csv", Tracks(truth.xy, truth.measurement, FIRST_FRAME).to_rows())
+    write_table(folder / "truth.csv", Tracks.from_dense(truth.xy, truth.measurement, FIRST_FRAME).to_rows())
     return folder, columns
 
 

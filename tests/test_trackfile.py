@@ -19,7 +19,7 @@ def _tracks(seed=0, n_tracks=12, n_frames=9, first_frame=2):
         xy[row, end:] = np.nan
     measurement = np.zeros(xy.shape[:2], dtype=np.int64)
     ids = np.sort(rng.choice(1000, n_tracks, replace=False))
-    return Tracks(xy=xy, measurement=measurement, first_frame=first_frame, track_ids=ids)
+    return Tracks.from_dense(xy=xy, measurement=measurement, first_frame=first_frame, track_ids=ids)
 
 
 def _same(a: Tracks, b: Tracks, ids=True):
@@ -47,7 +47,7 @@ def test_our_csv_keeps_interpolated_points(tmp_path):
     tracks = _tracks()
     measurement = tracks.measurement.copy()
     measurement[0, 5] = -1
-    marked = Tracks(xy=tracks.xy, measurement=measurement, first_frame=tracks.first_frame, track_ids=tracks.track_ids)
+    marked = Tracks.from_dense(xy=tracks.xy, measurement=measurement, first_frame=tracks.first_frame, track_ids=tracks.track_ids)
     write_tracks(tmp_path / "t.csv", marked)
     np.testing.assert_array_equal(read_tracks(tmp_path / "t.csv").interpolated, marked.interpolated)
 

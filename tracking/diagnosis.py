@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .metrics import UNMATCHED, match_points, true_track_owners
-from .tracks import NO_MEASUREMENT, Tracks
+from .tracks import Tracks
 
 
 def first_errors(result: Tracks, truth: Tracks, tolerance: float) -> dict[str, np.ndarray]:
@@ -32,7 +32,7 @@ def first_errors(result: Tracks, truth: Tracks, tolerance: float) -> dict[str, n
     """
     matched = match_points(result, truth, tolerance)
     owner = true_track_owners(matched, result, truth)
-    measured = truth.present & (truth.measurement != NO_MEASUREMENT)
+    measured = truth.present & ~truth.interpolated
     records = []
     for track in range(truth.n_tracks):
         columns = np.flatnonzero(measured[track])

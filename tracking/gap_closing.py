@@ -1,6 +1,9 @@
-"""Join a track that ends to a track that starts a few frames later when they are one object.
+"""Gap filling after the passes: extend track ends, and join a track that ends to a track that
+starts a few frames later when they are one object.
 
-IPAN's post-processing idea, in GOA's terms: the end of track A (its last measured point and
+A track opens only from a run of measured frames, so the first point of a track that starts
+badly placed for its first links stays free; :func:`extend_track_ends` gives it back.
+:func:`join_track_ends` is IPAN's post-processing idea, in GOA's terms: the end of track A (its last measured point and
 velocity) is joined to the start of track B (first point and velocity) across ``gap`` missed
 frames when both moves through the bridge, from A's velocity to the bridging velocity and from
 it to B's, pass the individual motion model within phi_max. A join costs the two links' costs
@@ -10,13 +13,73 @@ joins are chosen together by one optimal assignment of ends to starts.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
 from .assignment import UNASSIGNED, solve_split
-from .goa import GOAConfig
+from .goa import GOAConfig, HeadState, assign_step
 from .motion import Candidates
+
+
+@dataclass(frozen=True)
+class FillGaps:
+    """Gap filling: both ends of every track extended, then (with ``join``) track ends joined
+    to track starts at most ``max_gap`` frames later."""
+
+    max_gap: int = 10
+    join: bool = True
+
+    def fill(self, frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
+        """The tracks of ``assignment`` (measurement index per track and frame, -1 for none)
+        with their ends extended and their gaps joined."""
+        assignment = extend_track_ends(frames, assignment, config)
+        assignment = extend_track_ends(frames[::-1], assignment[:, ::-1], config)[:, ::-1]
+        if self.join:
+            assignment = join_track_ends(frames, assignment, config, self.max_gap)
+        return assignment
+
+
+def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """Extend track ends frame by frame with the measurements no track holds, when they continue
+    the motion (one GOA step per frame among the tracks that end just before it).
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions per frame, pixels, in the order the ends are extended.
+    assignment : ndarray of int, shape (n_tracks, n_frames)
+        Measurement index per track and frame, -1 where none.
+    config : GOAConfig
+
+    Returns
+    -------
+    ndarray of int, shape (n_tracks, n_frames)
+    """
+    assignment = assignment.copy()
+    n = len(frames)
+    held = assignment != UNASSIGNED
+    free = [np.ones(f.shape[0], bool) for f in frames]
+    for k in range(n):
+        free[k][assignment[held[:, k], k]] = False
+    # Frame after each track's last measurement (n when it runs to the end).
+    frame = np.arange(n)
+    after_last = np.where(held, frame, -1).max(axis=1) + 1
+    for k in range(2, n):
+        heads = np.flatnonzero((after_last == k) & held[:, k - 1] & held[:, k - 2])
+        index = np.flatnonzero(free[k])
+        if heads.size == 0 or index.size == 0:
+            continue
+        last = frames[k - 1][assignment[heads, k - 1]]
+        state = HeadState(last, np.full(heads.size, k - 1), last - frames[k - 2][assignment[heads, k - 2]])
+        taken = assign_step(state, k, frames[k][index], config)
+        got = taken != UNASSIGNED
+        assignment[heads[got], k] = index[taken[got]]
+        free[k][index[taken[got]]] = False
+        held[heads[got], k] = True
+        after_last[heads[got]] = k + 1
+    return assignment
 
 
 def _ends(frames: Sequence[np.ndarray], assignment: np.ndarray, reverse: bool) -> tuple[np.ndarray, ...]:
@@ -42,7 +105,7 @@ def _ends(frames: Sequence[np.ndarray], assignment: np.ndarray, reverse: bool) -
     return outer, xy[0], (xy[0] - xy[1]) / (outer - inner)[:, None]
 
 
-def close_gaps(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:
+def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig, max_gap: int) -> np.ndarray:
     """Join track ends to later track starts across at most ``max_gap`` missed frames.
 
     Parameters
@@ -78,14 +141,14 @@ def close_gaps(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOA
     gap = first[start] - last[end]  # frames the bridge spans, missed frames + 1
 
     bridge = Candidates(end, start, start_xy[start] - end_xy[end], gap, end_velocity[end])
-    speed = np.hypot(*bridge.velocity.T)
-    scale = config.d_max if config.d_max is not None else max(float(speed.max(initial=0.0)), 1.0)
+    bridge = bridge.subset(config.speed.admits(bridge.velocity))
+    end, start, gap = bridge.head, bridge.measurement, bridge.gap
+    # Both moves, into the bridge and out of it, are scored on the bridges' scale.
+    scale = config.speed.scale(bridge.velocity)
     leaving = Candidates(end, start, start_velocity[start], np.ones_like(gap), bridge.velocity)
     into = config.individual.cost(bridge, config.phi_max, scale)
     out = config.individual.cost(leaving, config.phi_max, scale)
-    valid = (into <= config.phi_max) & (out <= config.phi_max) & (speed >= config.d_min)
-    if config.d_max is not None:
-        valid &= speed <= config.d_max
+    valid = (into <= config.phi_max) & (out <= config.phi_max)
     end, start, gap = end[valid], start[valid], gap[valid]
     weight = into[valid] + out[valid] + (gap - 1) * config.phi_max
     # Leaving an end and a start apart costs more than any valid join, so every join that does
@@ -114,4 +177,4 @@ def _chain(assignment: np.ndarray, successor: np.ndarray) -> np.ndarray:
     return merged
 
 
-__all__ = ["close_gaps"]
+__all__ = ["FillGaps", "extend_track_ends", "join_track_ends"]

@@ -1,4 +1,4 @@
-"""The greedy optimal assignment (GOA) tracker and its self-initialising up-down driver.
+"""The greedy optimal assignment (GOA) tracker and the one up-down driver.
 
 Veenman, Reinders and Backer (2001): at each frame step, the track heads are assigned to the
 next frame's measurements by one optimal assignment that minimises the combined motion model,
@@ -9,22 +9,40 @@ measurements that fit no head go to *false tracks*.
 GOA-updown needs no given correspondences: it initialises the first links, runs GOA forwards
 (up), then runs it again backwards in time (down) starting from the up pass's last links, so
 that the early frames are re-decided with the velocities learned later.
+
+Where each part lives: association per frame is :func:`assign_step` (candidates gated by the
+model and :class:`~seedtrack.tracking.motion.SpeedLimits`, costs, :func:`solve`); one pass is
+:func:`goa_pass`; the up-down driver is :func:`goa_updown`. Track start and track end
+(:mod:`seedtrack.tracking.lifecycle`) and gap filling (:mod:`seedtrack.tracking.gap_closing`)
+are parts the driver is given; without them it is the paper's fixed-count GOA-updown.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Callable, Sequence
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links
-from .motion import Candidates, CombinedModel, IndividualModel
-from .tracks import Tracks, check_limit, link_speed_limit, point_frames, tracks_from_assignment
+from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
+from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
+# One frame's assignment by name: per connected component of the gated graph, or the paper's
+# whole augmented matrix (for checking).
+SOLVERS: dict[str, Callable[..., np.ndarray]] = {"split": solve_split, "dense": solve_dense}
+# Weight of the false-track/slave block, in units of the unmatched weight (see GOAConfig.corner).
+_CORNERS = {"phi": 1.0, "zero": 0.0}
+# Frames that score the first links: "im1" the first link alone, "lookahead" config.lookahead.
+_FIRST_LINK_FRAMES = {"im1": 2, "lookahead": None}
+
+
+def _check_choice(name: str, value: str, choices: dict) -> None:
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -99,16 +117,13 @@ class GOAConfig:
         check_limit("d_max", self.d_max)
         if self.d_min < 0 or (self.d_max is not None and self.d_min >= self.d_max):
             raise ValueError(f"d_min must be non-negative and below d_max, got {self.d_min}")
-        if self.corner not in ("zero", "phi"):
-            raise ValueError(f"corner must be 'zero' or 'phi', got {self.corner!r}")
-        if self.initialisation not in ("lookahead", "im1"):
-            raise ValueError(f"initialisation must be 'lookahead' or 'im1', got {self.initialisation!r}")
+        _check_choice("corner", self.corner, _CORNERS)
+        _check_choice("initialisation", self.initialisation, _FIRST_LINK_FRAMES)
         if self.lookahead < 3:
             raise ValueError(f"lookahead must span at least 3 frames, got {self.lookahead}")
         if self.neighbours < 1:
             raise ValueError(f"neighbours must be at least 1, got {self.neighbours}")
-        if self.solver not in ("split", "dense"):
-            raise ValueError(f"solver must be 'split' or 'dense', got {self.solver!r}")
+        _check_choice("solver", self.solver, SOLVERS)
 
     @property
     def unmatched_weight(self) -> float:
@@ -116,26 +131,43 @@ class GOAConfig:
 
     @property
     def corner_weight(self) -> float:
-        return 0.0 if self.corner == "zero" else self.unmatched_weight
+        return _CORNERS[self.corner] * self.unmatched_weight
+
+    @property
+    def speed(self) -> SpeedLimits:
+        """The speed gate of every link, d_min to d_max."""
+        return SpeedLimits(self.d_min, self.d_max)
 
 
 @dataclass
-class _HeadState:
-    """What GOA knows of each head: its newest true measurement and its velocity."""
+class HeadState:
+    """What GOA knows of each head: its newest true measurement and its velocity.
 
-    last_xy: np.ndarray  # (m, 2), NaN for a head that never held a measurement
-    last_step: np.ndarray  # (m,) pass step of that measurement
-    velocity: np.ndarray  # (m, 2), NaN where fewer than two true measurements
+    Attributes
+    ----------
+    last_xy : ndarray of float, shape (m, 2)
+        Position of the newest true measurement, pixels; NaN for a head that never held one.
+    last_step : ndarray of int, shape (m,)
+        Pass step of that measurement, -1 for none.
+    velocity : ndarray of float, shape (m, 2)
+        From the two newest true measurements, pixels/frame (gap-normalised); NaN where fewer.
+    """
+
+    last_xy: np.ndarray
+    last_step: np.ndarray
+    velocity: np.ndarray
 
     @classmethod
-    def from_history(cls, frames: Sequence[np.ndarray], assignment: np.ndarray, steps: int) -> "_HeadState":
+    def from_history(cls, frames: Sequence[np.ndarray], assignment: np.ndarray, start: int, until: int) -> "HeadState":
+        """The state after steps ``start..until`` of ``assignment`` (heads x steps, indices into ``frames``)."""
         m = assignment.shape[0]
         state = cls(np.full((m, 2), np.nan), np.full(m, -1, dtype=np.int64), np.full((m, 2), np.nan))
-        for step in range(steps):
+        for step in range(start, until + 1):
             state.advance(step, assignment[:, step], frames[step])
         return state
 
     def advance(self, step: int, measurement: np.ndarray, points: np.ndarray) -> None:
+        """Take the measurements (index per head, -1 for a slave) of the frame at ``step``."""
         held = measurement != UNASSIGNED
         new_xy = points[measurement[held]]
         had = held & (self.last_step >= 0)
@@ -144,15 +176,26 @@ class _HeadState:
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
+    def __getitem__(self, rows: np.ndarray) -> "HeadState":
+        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows])
 
-def _candidates(state: _HeadState, step: int, points: np.ndarray, config: GOAConfig) -> Candidates:
+    def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
+        self.last_xy[rows], self.last_step[rows], self.velocity[rows] = other.last_xy, other.last_step, other.velocity
+
+    def __add__(self, other: "HeadState") -> "HeadState":
+        return HeadState(
+            np.concatenate((self.last_xy, other.last_xy)),
+            np.concatenate((self.last_step, other.last_step)),
+            np.concatenate((self.velocity, other.velocity)),
+        )
+
+
+def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConfig) -> Candidates:
     """Gated (head, measurement) pairs for the frame at ``step``, found with a KD-tree."""
     alive = np.flatnonzero(state.last_step >= 0)
     has_history = ~np.isnan(state.velocity[:, 0])
     speed = np.hypot(*np.nan_to_num(state.velocity).T)
-    limit = config.individual.gate_radius(speed, has_history, config.phi_max)
-    if config.d_max is not None:
-        limit = np.minimum(limit, config.d_max)
+    limit = config.speed.reach(config.individual.gate_radius(speed, has_history, config.phi_max))
     gap = step - state.last_step
     heads: list[np.ndarray] = []
     measurements: list[np.ndarray] = []
@@ -181,24 +224,28 @@ def _candidates(state: _HeadState, step: int, points: np.ndarray, config: GOACon
 
 
 def _unbounded_pairs(tree: cKDTree, centres: np.ndarray, n_points: int, config: GOAConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs for heads that no speed limit bounds: every measurement for order-2 models
-    (which score any distance), the ``neighbours`` nearest for heads scored by distance."""
+    """Pairs for heads that no speed limit bounds: the ``neighbours`` nearest measurements."""
     k = min(config.neighbours, n_points)
     _, index = tree.query(centres, k=k)
     index = np.asarray(index).reshape(len(centres), k)
     return np.repeat(np.arange(len(centres)), k), index.ravel()
 
 
-def _scale(candidates: Candidates, config: GOAConfig) -> float:
-    """Speed that costs phi_max under the IM1 fallback: d_max, or the farthest candidate."""
-    if config.d_max is not None:
-        return config.d_max
-    speeds = np.hypot(*candidates.velocity.T)
-    return float(speeds.max()) if speeds.size and speeds.max() > 0 else 1.0
+def solve(config: GOAConfig, n_heads: int, n_measurements: int, head: np.ndarray, measurement: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """One optimal assignment of heads to measurements from the acceptable links' individual
+    costs: the combined model's weights, slaves and false tracks at the unmatched weight.
+
+    Returns
+    -------
+    ndarray of int, shape (n_heads,)
+        Measurement index per head, -1 for a slave.
+    """
+    weight = config.combined.weights(cost, head, measurement)
+    return SOLVERS[config.solver](n_heads, n_measurements, head, measurement, weight, config.unmatched_weight, config.corner_weight)
 
 
-def assign_step(state: _HeadState, step: int, points: np.ndarray, config: GOAConfig) -> np.ndarray:
-    """One step of the paper's Algorithm 1: cost, prune, reweight, assign.
+def assign_step(state: HeadState, step: int, points: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """Association, one step of the paper's Algorithm 1: cost, prune, reweight, assign.
 
     Returns
     -------
@@ -206,25 +253,89 @@ def assign_step(state: _HeadState, step: int, points: np.ndarray, config: GOACon
         Measurement index per head in the frame at ``step``, or -1 for a slave.
     """
     candidates = _candidates(state, step, points, config)
-    speed = np.hypot(*candidates.velocity.T)
-    valid = speed >= config.d_min
-    if config.d_max is not None:
-        valid &= speed <= config.d_max
-    candidates = candidates.subset(valid)
-    cost = config.individual.cost(candidates, config.phi_max, _scale(candidates, config))
+    candidates, cost = acceptable_links(config.individual, candidates, config.phi_max, config.speed)
+    return solve(config, state.last_xy.shape[0], points.shape[0], candidates.head, candidates.measurement, cost)
+
+
+class Heads:
+    """Every head of one pass: what it holds per step, its state, its run of slaves, whether it runs."""
+
+    def __init__(self, n_steps: int):
+        self.assignment = np.empty((0, n_steps), dtype=np.int64)
+        self.state = HeadState(np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)))
+        self.slaves = np.empty(0, np.int64)  # consecutive slaves up to the latest step
+        self.running = np.empty(0, bool)
+
+    def add(self, frames: Sequence[np.ndarray], rows: np.ndarray, start: int, until: int) -> None:
+        """Add heads whose measurements of steps ``start..until`` are given in ``rows`` (H, n_steps)."""
+        state = HeadState.from_history(frames, rows, start, until)
+        self.assignment = np.concatenate((self.assignment, rows))
+        self.state = self.state + state
+        self.slaves = np.concatenate((self.slaves, until - state.last_step))
+        self.running = np.concatenate((self.running, np.ones(rows.shape[0], bool)))
+
+    def take(self, rows: np.ndarray, state: HeadState, step: int, taken: np.ndarray, points: np.ndarray) -> None:
+        """Heads ``rows``, in ``state`` before ``step``, take measurements ``taken`` of ``points`` (-1 a slave)."""
+        state.advance(step, taken, points)
+        self.state[rows] = state
+        self.assignment[rows, step] = taken
+        self.slaves[rows] = np.where(taken == UNASSIGNED, self.slaves[rows] + 1, 0)
+
+
+def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
+    """First links of a self-initialising pass: one head per measurement of ``frames[0]``.
+
+    The links do not depend on the order of the rows within a frame (see
+    :func:`seedtrack.tracking.tracks.canonical_order`).
+
+    Returns
+    -------
+    ndarray of int, shape (M_0, 2)
+        Each head's measurement in frames 0 and 1 (-1 where it gets a slave), head i on
+        measurement i of ``frames[0]``.
+    """
+    frames = point_frames(frames)
+    order = [np.arange(f.shape[0]) if o is None else o for f, o in zip(frames, canonical_order(frames))]
+    second = _initial_links([f[o] for f, o in zip(frames, order)], config)[:, 1]
+    links = np.column_stack((np.arange(frames[0].shape[0]), np.full(frames[0].shape[0], UNASSIGNED)))
+    held = second != UNASSIGNED
+    links[order[0][held], 1] = order[1][second[held]]
+    return links
+
+
+def _initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
+    lookahead = _FIRST_LINK_FRAMES[config.initialisation] or config.lookahead
+    head, measurement, cost = first_links(frames, config.individual, config.phi_max, config.speed, config.neighbours, lookahead)
     keep = cost <= config.phi_max
-    candidates, cost = candidates.subset(keep), cost[keep]
-    weight = config.combined.weights(cost, candidates.head, candidates.measurement)
-    solve = solve_split if config.solver == "split" else solve_dense
-    return solve(
-        state.last_xy.shape[0],
-        points.shape[0],
-        candidates.head,
-        candidates.measurement,
-        weight,
-        config.unmatched_weight,
-        config.corner_weight,
-    )
+    second = solve(config, frames[0].shape[0], frames[1].shape[0], head[keep], measurement[keep], cost[keep])
+    return np.column_stack((np.arange(frames[0].shape[0]), second))
+
+
+class TrackStart(Protocol):
+    """Opens tracks among the measurements that no head holds (see :mod:`seedtrack.tracking.lifecycle`)."""
+
+    def open(self, frames: Sequence[np.ndarray], free: list[np.ndarray], step: int, config: GOAConfig) -> tuple[np.ndarray, int]:
+        """New tracks confirmed by ``step``: their measurement index per step (-1 outside their
+        first steps) and the step where they start."""
+
+
+class TrackEnd(Protocol):
+    """Ends tracks that have been missed too long (see :mod:`seedtrack.tracking.lifecycle`)."""
+
+    def confirm_returns(
+        self, state: HeadState, step: int, frames: Sequence[np.ndarray], free: list[np.ndarray], taken: np.ndarray, config: GOAConfig
+    ) -> np.ndarray:
+        """``taken`` with the measurements of heads back from slaves that are not confirmed undone."""
+
+    def ended(self, slaves: np.ndarray) -> np.ndarray:
+        """Boolean per head: its run of slaves ends its track."""
+
+
+class GapFilling(Protocol):
+    """Fills what the passes left between and beyond tracks (see :mod:`seedtrack.tracking.gap_closing`)."""
+
+    def fill(self, frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
+        """The tracks (rows of measurement indices per frame) with ends extended and gaps joined."""
 
 
 def goa_pass(
@@ -232,84 +343,112 @@ def goa_pass(
     initial: np.ndarray,
     config: GOAConfig = GOAConfig(),
     progress: Progress | None = None,
+    *,
+    start: TrackStart | None = None,
+    end: TrackEnd | None = None,
 ) -> np.ndarray:
-    """Run GOA over the frames in the order given, from known links in the first two frames.
+    """Run GOA over the frames in the order given: association at each frame step, and, when
+    given, track start and track end.
+
+    Like Stone Soup's tracker loop, each step associates the running heads with the frame's
+    measurements (:func:`assign_step`), lets ``end`` end the tracks missed too long, then lets
+    ``start`` open tracks among the measurements left free. Without either, this is the paper's
+    GOA: a fixed set of heads from their given first links.
 
     Parameters
     ----------
     frames : sequence of ndarray, each (M_k, 2)
         Measurement positions per frame, pixels, in processing order.
     initial : ndarray of int, shape (m, 2)
-        Each head's measurement index in ``frames[0]`` and ``frames[1]`` (-1 for none).
+        Each head's measurement index in ``frames[0]`` and ``frames[1]`` (-1 for none); with
+        ``end`` each must hold one in ``frames[0]``.
     config : GOAConfig
     progress : callable, optional
-        Called with 1 after each frame step.
+        Called with 1 after each frame step (``len(frames) - 1`` calls).
+    start : TrackStart, optional
+    end : TrackEnd, optional
 
     Returns
     -------
-    ndarray of int, shape (m, len(frames))
-        Measurement index per head and frame, -1 for a slave.
+    ndarray of int, shape (n_tracks, len(frames))
+        Measurement index per track and frame, -1 for a slave or where it does not run. Given
+        heads come first, in their order, then tracks in the order they opened.
     """
-    m = initial.shape[0]
-    assignment = np.full((m, len(frames)), UNASSIGNED, dtype=np.int64)
-    assignment[:, : initial.shape[1]] = initial
-    state = _HeadState.from_history(frames, assignment, initial.shape[1])
-    for step in range(initial.shape[1], len(frames)):
-        assignment[:, step] = assign_step(state, step, frames[step], config)
-        state.advance(step, assignment[:, step], frames[step])
+    n = len(frames)
+    initial = np.asarray(initial, dtype=np.int64)
+    heads = Heads(n)
+    free = [np.ones(f.shape[0], bool) for f in frames]
+    if initial.shape[0]:
+        rows = np.full((initial.shape[0], n), UNASSIGNED, dtype=np.int64)
+        rows[:, : initial.shape[1]] = initial
+        heads.add(frames, rows, 0, initial.shape[1] - 1)
+        for k in range(initial.shape[1]):
+            free[k][initial[initial[:, k] != UNASSIGNED, k]] = False
+    first_step = initial.shape[1] if initial.shape[0] else 1
+    for step in range(1, n):
+        if step >= first_step:
+            running = np.flatnonzero(heads.running)
+            state = heads.state[running]
+            taken = assign_step(state, step, frames[step], config)
+            if end is not None:
+                taken = end.confirm_returns(state, step, frames, free, taken, config)
+            heads.take(running, state, step, taken, frames[step])
+            if end is not None:
+                heads.running[running[end.ended(heads.slaves[running])]] = False
+            free[step][taken[taken != UNASSIGNED]] = False
+        if start is not None:
+            rows, opened = start.open(frames, free, step, config)
+            if rows.shape[0]:
+                heads.add(frames, rows, opened, step)
+                for k in range(opened, step + 1):
+                    free[k][rows[:, k]] = False
         if progress is not None:
             progress(1)
-    return assignment
+    return heads.assignment
 
 
-def initial_links(frames: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
-    """First links of a self-initialising pass: one head per measurement of ``frames[0]``.
+def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig, start: TrackStart | None) -> np.ndarray:
+    """The down pass's first links (in reversed frame order).
 
-    Returns
-    -------
-    ndarray of int, shape (M_0, 2)
-        Each head's measurement in frames 0 and 1 (-1 where it gets a slave).
-    """
-    first = np.arange(frames[0].shape[0])
-    lookahead = 2 if config.initialisation == "im1" else config.lookahead
-    head, measurement, cost = first_links(
-        frames, config.individual, config.phi_max, config.d_max, config.d_min, config.neighbours, lookahead
-    )
-    keep = cost <= config.phi_max
-    weight = config.combined.weights(cost[keep], head[keep], measurement[keep])
-    solve = solve_split if config.solver == "split" else solve_dense
-    second = solve(
-        first.size, frames[1].shape[0], head[keep], measurement[keep], weight, config.unmatched_weight, config.corner_weight
-    )
-    return np.column_stack((first, second))
-
-
-def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig) -> np.ndarray:
-    """The down pass's first links (in reversed frame order): the up pass's last links and, with
-    ``restart_lost``, fresh links for every measurement of the last frame that no head holds,
-    on heads the up pass lost (no measurement in either of the last two frames), then on new
-    heads. Without d_max the fresh links are limited to the speeds the up pass saw: IM2 is
+    With track start, the tracks of the up pass that hold a measurement in the last frame (the
+    pass opens the others itself). Without (the paper's fixed count), the up pass's last links
+    and, with ``restart_lost``, fresh links for every measurement of the last frame that no head
+    holds, on heads the up pass lost (no measurement in either of the last two frames), then on
+    new heads. Without d_max the fresh links are limited to the speeds the up pass saw: IM2 is
     scale free, and among a few free points a fast chain of unrelated points can look smooth."""
     backwards = frames[::-1]
-    start = up[:, ::-1][:, :2]
-    free = np.setdiff1d(np.arange(backwards[0].shape[0]), start[:, 0])
+    links = up[:, ::-1][:, :2]
+    if start is not None:
+        return links[links[:, 0] != UNASSIGNED]
+    free = np.setdiff1d(np.arange(backwards[0].shape[0]), links[:, 0])
     if not (config.restart_lost and free.size):
-        return start
+        return links
     if config.d_max is None:
         config = replace(config, d_max=link_speed_limit(tracks_from_assignment(list(frames), up)))
-    unused = np.setdiff1d(np.arange(backwards[1].shape[0]), start[:, 1])
-    fresh = initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
-    second = np.full(free.size, UNASSIGNED, dtype=start.dtype)
+    unused = np.setdiff1d(np.arange(backwards[1].shape[0]), links[:, 1])
+    fresh = _initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
+    second = np.full(free.size, UNASSIGNED, dtype=links.dtype)
     linked = fresh[:, 1] != UNASSIGNED
     second[linked] = unused[fresh[linked, 1]]
-    lost = np.flatnonzero((start == UNASSIGNED).all(axis=1))[: free.size]
+    lost = np.flatnonzero((links == UNASSIGNED).all(axis=1))[: free.size]
     extra = free.size - lost.size
-    start = np.concatenate((start, np.full((extra, 2), UNASSIGNED, dtype=start.dtype)))
-    rows = np.concatenate((lost, np.arange(start.shape[0] - extra, start.shape[0])))
-    start[rows] = np.column_stack((free, second))
-    return start
+    links = np.concatenate((links, np.full((extra, 2), UNASSIGNED, dtype=links.dtype)))
+    rows = np.concatenate((lost, np.arange(links.shape[0] - extra, links.shape[0])))
+    links[rows] = np.column_stack((free, second))
+    return links
 
 
+def _in_order(assignment: np.ndarray) -> np.ndarray:
+    """Rows sorted by first measured frame, then by the measurement index there."""
+    if assignment.shape[0] == 0:
+        return assignment
+    held = assignment != UNASSIGNED
+    first = held.argmax(axis=1)
+    first_index = assignment[np.arange(assignment.shape[0]), first]
+    return assignment[np.lexsort((first_index, first))]
+
+
+@order_independent
 def goa(
     frames: Sequence[np.ndarray],
     initial: np.ndarray,
@@ -329,7 +468,7 @@ def goa(
     first_frame : int
         0-based frame index of ``frames[0]``.
     progress : callable, optional
-        Called with 1 after each frame step.
+        Called with 1 after each frame step (``len(frames) - 1`` calls).
 
     Returns
     -------
@@ -341,13 +480,25 @@ def goa(
     return tracks_from_assignment(frames, assignment, first_frame)
 
 
+@order_independent
 def goa_updown(
     frames: Sequence[np.ndarray],
     config: GOAConfig = GOAConfig(),
     first_frame: int = 0,
     progress: Progress | None = None,
+    *,
+    start: TrackStart | None = None,
+    end: TrackEnd | None = None,
+    gaps: GapFilling | None = None,
 ) -> Tracks:
-    """Self-initialising GOA: initial links, an up pass, then a down pass in reverse time.
+    """Self-initialising GOA: an up pass, then a down pass in reverse time, then gap filling.
+
+    The one up-down driver. With no ``start``, ``end`` and ``gaps`` it is GOA-updown as
+    published, with a fixed count of tracks: the up pass starts from the first links
+    (:func:`initial_links`), the down pass from the up pass's last links. With them (see
+    :class:`seedtrack.tracking.lifecycle.LifecycleConfig`) tracks open and end anywhere in
+    either pass, the down pass re-decides every track start with the velocities learned later,
+    and ``gaps`` joins track ends to later starts.
 
     Parameters
     ----------
@@ -357,27 +508,41 @@ def goa_updown(
     first_frame : int
         0-based frame index of ``frames[0]``.
     progress : callable, optional
-        Called with 1 after each frame step of either pass (2 * (n_frames - 1) calls).
+        Called with 1 after each frame step of either pass (``pass_steps(n_frames)`` calls).
+    start : TrackStart, optional
+        Opens tracks among the measurements no head holds.
+    end : TrackEnd, optional
+        Ends tracks missed too long.
+    gaps : GapFilling, optional
+        Extends track ends and joins them across gaps after the passes.
 
     Returns
     -------
     Tracks
-        One track per measurement of the first frame (tracks the up pass lost may be replaced,
-        and more added, by tracks that the down pass starts in the last frame; see
-        ``GOAConfig.restart_lost``); bound slaves interpolated.
+        Without ``start``: one track per measurement of the first frame (tracks the up pass
+        lost may be replaced, and more added, by tracks that the down pass starts in the last
+        frame; see ``GOAConfig.restart_lost``). With it: ordered by first frame, then by
+        measurement index there, measurements on no track (false detections) left out. Bound
+        slaves interpolated.
+
+    Examples
+    --------
+    >>> frames = [np.array([[0.0, 0.0], [50.0, 0.0]]) + [2.0 * k, 1.0 * k] for k in range(4)]
+    >>> tracks = goa_updown(frames, GOAConfig(d_max=10.0))
+    >>> tracks.n_tracks, tracks.n_frames
+    (2, 4)
     """
     frames = point_frames(frames)
     if len(frames) < 2:
-        assignment = np.arange(frames[0].shape[0])[:, None] if frames else np.empty((0, 0), np.int64)
-        return tracks_from_assignment(frames, assignment, first_frame)
-    up = goa_pass(frames, initial_links(frames, config), config, progress)
-    if progress is not None:
-        progress(1)
-    backwards = frames[::-1]
-    down = goa_pass(backwards, _down_start(frames, up, config), config, progress)
-    if progress is not None:
-        progress(1)
-    return tracks_from_assignment(frames, down[:, ::-1], first_frame)
+        points = frames[0].shape[0] if frames and start is None else 0
+        return tracks_from_assignment(frames, np.arange(points)[:, None].repeat(len(frames), axis=1), first_frame)
+    first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
+    up = goa_pass(frames, first, config, progress, start=start, end=end)
+    down = goa_pass(frames[::-1], _down_start(frames, up, config, start), config, progress, start=start, end=end)[:, ::-1]
+    if gaps is not None:
+        down = gaps.fill(frames, down, config)
+    # Tracks that open anywhere are listed by where they open.
+    return tracks_from_assignment(frames, down if start is None else _in_order(down), first_frame)
 
 
 def pass_steps(n_frames: int) -> int:
@@ -385,4 +550,17 @@ def pass_steps(n_frames: int) -> int:
     return 2 * max(n_frames - 1, 0) if n_frames >= 2 else 0
 
 
-__all__ = ["GOAConfig", "goa", "goa_updown", "goa_pass", "assign_step", "initial_links", "pass_steps"]
+__all__ = [
+    "GOAConfig",
+    "HeadState",
+    "Heads",
+    "TrackStart",
+    "TrackEnd",
+    "GapFilling",
+    "goa",
+    "goa_updown",
+    "goa_pass",
+    "assign_step",
+    "initial_links",
+    "pass_steps",
+]

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .motion import Candidates, IndividualModel, smooth_motion_cost
+from .motion import Candidates, IndividualModel, NearestNeighbour, SmoothMotion, SpeedLimits, smooth_motion_cost
 
 # Cost of a slave on a first-link path, as a share of phi_max.
 _SLAVE_SHARE = 0.15
@@ -28,7 +28,7 @@ _CONTINUATIONS = 3
 # seeds): share 0 -> 0.051 / 0.111, 0.2 -> 0.047 / 0.045, 0.5 -> 0.047 / 0.045; the dishes stay
 # 80/80 up to 0.5 and fail at 1 (the paper's IM1 alone).
 _NEAREST_SHARE = 0.3
-_LINEAR_IM1 = IndividualModel("im1")
+_LINEAR_IM1 = NearestNeighbour()
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -46,8 +46,7 @@ def first_links(
     frames: Sequence[np.ndarray],
     model: IndividualModel,
     phi_max: float,
-    d_max: float | None,
-    d_min: float,
+    limits: SpeedLimits,
     neighbours: int,
     lookahead: int,
     slave_cost: float | None = None,
@@ -59,17 +58,16 @@ def first_links(
     frames : sequence of ndarray, each (M_k, 2)
         Measurement positions, pixels, in processing order; at least 2 frames.
     model : IndividualModel
-        Scores each triplet; an order-1 model is replaced by IM2 with default weights, since a
-        triplet needs a velocity.
+        Scores each triplet by smooth motion: IM2 with its weights, any other model is replaced
+        by IM2 with default weights.
     phi_max : float
         Largest cost of any triplet on a path.
-    d_max : float or None
-        Largest speed, pixels/frame; None takes the ``neighbours`` nearest points of frame 1
-        for each point of frame 0 and lets phi_max bound the speeds after that.
-    d_min : float
-        Smallest speed, pixels/frame.
+    limits : SpeedLimits
+        The speed gate of every link of a path, pixels/frame; with no d_max, the ``neighbours``
+        nearest points of frame 1 are the candidates of each point of frame 0 and phi_max
+        bounds the speeds after that.
     neighbours : int
-        Candidates per frame-0 point when d_max is None.
+        Candidates per frame-0 point when there is no d_max.
     lookahead : int
         Frames the path spans, the first link's two included (3 scores by one triplet).
     slave_cost : float, optional
@@ -88,19 +86,16 @@ def first_links(
         possible but loses to smooth alternatives.
     """
     link_model = model
-    if model.order == 1:
-        model = IndividualModel("im2")
+    if not isinstance(model, SmoothMotion):
+        model = SmoothMotion()
     if slave_cost is None:
         slave_cost = _SLAVE_SHARE * phi_max
     horizon = min(lookahead, len(frames))
-    head, measurement = _first_candidates(frames[0], frames[1], d_max, neighbours)
+    head, measurement = _first_candidates(frames[0], frames[1], limits.d_max, neighbours)
     velocity = frames[1][measurement] - frames[0][head]
-    speed = np.hypot(*velocity.T)
-    valid = speed >= d_min
-    if d_max is not None:
-        valid &= speed <= d_max
+    valid = limits.admits(velocity)
     head, measurement = head[valid], measurement[valid]
-    scale = d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)
+    scale = limits.scale(velocity[valid])
     # Without a lookahead an IM1 link model scores by its own cost (its power, 1 or 2); otherwise
     # the paper's linear IM1, the cost _NEAREST_SHARE was measured with.
     nearest_model = link_model if horizon < 3 and link_model.order == 1 else _LINEAR_IM1
@@ -130,11 +125,8 @@ def first_links(
         link_in = np.repeat(np.arange(origin.size), k)
         middle_index = target[link_in]
         next_velocity = frames[step + 1][point_out] - middle[link_in]
-        next_speed = np.hypot(*next_velocity.T)
         triplet_cost = smooth_motion_cost(move[link_in], next_velocity, model.w1, model.w2)
-        ok = (triplet_cost <= phi_max) & (next_speed >= d_min)
-        if d_max is not None:
-            ok &= next_speed <= d_max
+        ok = (triplet_cost <= phi_max) & limits.admits(next_velocity)
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
         # A link into a measured point may go on through a slave (one in a row at most), unless a
         # measured continuation already costs less than the slave would.

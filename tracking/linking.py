@@ -145,16 +145,16 @@ def link_goa(
 def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
     """``tracks`` with each measured position the measurement itself: moving into the drift's
     frame and back changes the last bits, and a measured point must keep its position."""
-    held = np.nonzero(tracks.measurement >= 0)
+    held = tracks.point_measurement >= 0
     offset = np.concatenate(([0], np.cumsum([f.shape[0] for f in frames])))
-    xy = tracks.xy.copy()
-    xy[held] = np.concatenate(frames)[offset[held[1]] + tracks.measurement[held]]
-    return replace(tracks, xy=xy)
+    xy = tracks.point_xy.copy()
+    xy[held] = np.concatenate(frames)[offset[tracks.point_column[held]] + tracks.point_measurement[held]]
+    return replace(tracks, point_xy=xy)
 
 
 def pass_steps(algorithm: str, n_frames: int) -> int:
     """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames."""
-    return max(n_frames - 2, 0) if algorithm == "goa" else _updown_steps(n_frames)
+    return max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
 
 
 __all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]

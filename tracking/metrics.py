@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .tracks import NO_MEASUREMENT, Tracks
+from .tracks import Tracks
 
 UNMATCHED = -1
 
@@ -146,7 +146,7 @@ def score_tracks(result: Tracks, truth: Tracks, tolerance: float = 1.0) -> Track
         Matching distance, pixels.
     """
     owner = true_track_owners(match_points(result, truth, tolerance), result, truth)
-    measured = truth.present & (truth.measurement != NO_MEASUREMENT)
+    measured = truth.present & ~truth.interpolated
 
     correct = 0
     relaxed = 0

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -62,6 +63,51 @@ class Candidates:
             gap=self.gap[keep],
             previous_velocity=self.previous_velocity[keep],
         )
+
+
+@dataclass(frozen=True)
+class SpeedLimits:
+    """The speed gate that every GOA link passes: d_min <= gap-normalised speed <= d_max.
+
+    Also the scale of the IM1 fallback (heads without a velocity, and the first links): the
+    speed that costs phi_max, which is d_max, or without one the fastest candidate of the
+    step (at least 1 pixel/frame).
+
+    Attributes
+    ----------
+    d_min : float
+        Smallest speed, pixels/frame.
+    d_max : float or None
+        Largest speed, pixels/frame; None for no limit.
+
+    Examples
+    --------
+    >>> SpeedLimits(d_max=5.0).admits(np.array([[3.0, 4.0], [3.0, 4.1]]))
+    array([ True, False])
+    """
+
+    d_min: float = 0.0
+    d_max: float | None = None
+
+    def admits(self, velocity: np.ndarray) -> np.ndarray:
+        """Boolean (P,): the velocities (P, 2), pixels/frame, whose speed is within the limits."""
+        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        ok = speed >= self.d_min
+        if self.d_max is not None:
+            ok &= speed <= self.d_max
+        return ok
+
+    def reach(self, radius: np.ndarray) -> np.ndarray:
+        """A model's gate radius (pixels/frame per head) capped at d_max."""
+        return radius if self.d_max is None else np.minimum(radius, self.d_max)
+
+    def scale(self, velocity: np.ndarray) -> float:
+        """Speed that costs phi_max under the IM1 fallback, pixels/frame: d_max, or the fastest
+        of the velocities (P, 2) given, at least 1."""
+        if self.d_max is not None:
+            return float(self.d_max)
+        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        return max(float(speed.max(initial=0.0)), 1.0)
 
 
 def nearest_neighbour_cost(candidates: Candidates, scale: float) -> np.ndarray:
@@ -152,40 +198,60 @@ def proximal_uniformity_cost(candidates: Candidates) -> np.ndarray:
     return cost
 
 
-@dataclass(frozen=True)
-class IndividualModel:
-    """Which individual model scores a pair, with its parameters.
+class _Registered:
+    """Models built by name: ``Base(name, **parameters)`` makes the registered model of that name.
 
-    Attributes
-    ----------
-    name : {"im1", "im2", "im3"}
-        IM1 nearest neighbour, IM2 smooth motion (Sethi-Jain), IM3 proximal uniformity.
-    w1, w2 : float
-        IM2 weights of direction and speed (the paper's rotating-dish values 0.1 and 0.9).
-    power : {1, 2}
-        IM1 exponent of the distance: 1 as in the paper, 2 for random walks, whose Gaussian
-        steps make the sum of squared distances the negative log-likelihood of an assignment;
-        across a gap of g frames the squared distance is divided by g (the variance grows
-        with g), not by g squared.
+    Each concrete model is a frozen dataclass whose first field is its ``name``; subclassing a
+    base with ``key="..."`` registers it, so a new model needs no change to the code that uses
+    models (``GOAConfig``, the trackers, the command's ``--individual-model`` choices).
     """
 
-    name: str = "im2"
-    w1: float = 0.1
-    w2: float = 0.9
-    power: int = 1
+    _registry: ClassVar[dict[str, type]]
+    _kind: ClassVar[str]
+    _default: ClassVar[str]
+    key: ClassVar[str]
 
-    def __post_init__(self) -> None:
-        if self.name not in ("im1", "im2", "im3"):
-            raise ValueError(f"unknown individual model {self.name!r}; choose im1, im2 or im3")
-        if self.w1 < 0 or self.w2 < 0 or self.w1 + self.w2 == 0:
-            raise ValueError("IM2 weights must be non-negative and not both zero")
-        if self.power not in (1, 2):
-            raise ValueError(f"IM1 power must be 1 or 2, got {self.power}")
+    def __init_subclass__(cls, key: str | None = None, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if key is None:  # a base: its own registry
+            cls._registry = {}
+        else:
+            cls.key = key
+            cls._registry[key] = cls
 
-    @property
-    def order(self) -> int:
-        """1 for models that need only the head position, 2 for those that need a velocity."""
-        return 1 if self.name == "im1" else 2
+    def __new__(cls, *args, **kwargs):
+        if "key" not in cls.__dict__:  # called on a base: build the model named
+            name = args[0] if args else kwargs.get("name", cls._default)
+            if name not in cls._registry:
+                choices = ", ".join(sorted(cls._registry)[:-1]) + " or " + sorted(cls._registry)[-1]
+                raise ValueError(f"unknown {cls._kind} {name!r}; choose {choices}")
+            cls = cls._registry[name]
+        return super().__new__(cls)
+
+    def _check_name(self) -> None:
+        if self.name != self.key:
+            raise ValueError(f"{type(self).__name__} is {self.key!r}, not {self.name!r}")
+
+
+class IndividualModel(_Registered):
+    """An individual motion model: how well one candidate measurement continues one track head.
+
+    ``IndividualModel("im1", power=2)`` builds the model registered as "im1"
+    (:data:`INDIVIDUAL_MODELS`); the default is "im2".
+
+    Examples
+    --------
+    >>> IndividualModel("im1", power=2)
+    NearestNeighbour(name='im1', power=2)
+    >>> IndividualModel().order
+    2
+    """
+
+    _kind = "individual model"
+    _default = "im2"
+    name: str
+    # 1 for models that need only the head position, 2 for those that need a velocity.
+    order: ClassVar[int] = 2
 
     def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
         """Individual cost of every candidate pair.
@@ -199,21 +265,9 @@ class IndividualModel:
         phi_max : float
             Largest allowed cost; used to scale the IM1 fallback.
         d_max : float
-            Speed that maps to cost phi_max under IM1, pixels/frame.
+            Speed that maps to cost phi_max under IM1, pixels/frame (:meth:`SpeedLimits.scale`).
         """
-        fallback = phi_max * nearest_neighbour_cost(candidates, d_max)
-        if self.name == "im1":
-            return fallback if self.power == 1 else phi_max * nearest_neighbour_cost(candidates, d_max) ** 2 * candidates.gap
-        if self.name == "im3":
-            return proximal_uniformity_cost(candidates)
-        history = candidates.has_history
-        cost = fallback
-        if history.any():
-            cost = fallback.copy()
-            cost[history] = smooth_motion_cost(
-                candidates.previous_velocity[history], candidates.velocity[history], self.w1, self.w2
-            )
-        return cost
+        raise NotImplementedError
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can pass the phi_max test, pixels/frame.
@@ -230,46 +284,104 @@ class IndividualModel:
         ndarray of float, shape (m,)
             ``inf`` where the model does not bound the speed.
         """
+        return np.full(speed.shape, np.inf)
+
+
+@dataclass(frozen=True)
+class NearestNeighbour(IndividualModel, key="im1"):
+    """IM1, nearest neighbour: the gap-normalised distance against the speed that costs phi_max.
+
+    Attributes
+    ----------
+    power : {1, 2}
+        Exponent of the distance: 1 as in the paper, 2 for random walks, whose Gaussian steps
+        make the sum of squared distances the negative log-likelihood of an assignment; across
+        a gap of g frames the squared distance is divided by g (the variance grows with g), not
+        by g squared.
+    """
+
+    name: str = "im1"
+    power: int = 1
+    order: ClassVar[int] = 1
+
+    def __post_init__(self) -> None:
+        self._check_name()
+        if self.power not in (1, 2):
+            raise ValueError(f"IM1 power must be 1 or 2, got {self.power}")
+
+    def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
+        if self.power == 1:
+            return phi_max * nearest_neighbour_cost(candidates, d_max)
+        return phi_max * nearest_neighbour_cost(candidates, d_max) ** 2 * candidates.gap
+
+
+@dataclass(frozen=True)
+class SmoothMotion(IndividualModel, key="im2"):
+    """IM2, Sethi and Jain's smooth motion (:func:`smooth_motion_cost`).
+
+    Attributes
+    ----------
+    w1, w2 : float
+        Weights of direction and speed (the paper's rotating-dish values 0.1 and 0.9).
+    """
+
+    name: str = "im2"
+    w1: float = 0.1
+    w2: float = 0.9
+
+    def __post_init__(self) -> None:
+        self._check_name()
+        if self.w1 < 0 or self.w2 < 0 or self.w1 + self.w2 == 0:
+            raise ValueError("IM2 weights must be non-negative and not both zero")
+
+    def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
+        cost = phi_max * nearest_neighbour_cost(candidates, d_max)
+        history = candidates.has_history
+        if history.any():
+            cost[history] = smooth_motion_cost(candidates.previous_velocity[history], candidates.velocity[history], self.w1, self.w2)
+        return cost
+
+    def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         radius = np.full(speed.shape, np.inf)
-        if self.name == "im2":
-            ratio = smooth_motion_speed_ratio_limit(phi_max, self.w2)
-            if math.isfinite(ratio):
-                bounded = ratio * (speed + SPEED_EPSILON)
-                radius[has_history] = bounded[has_history] * (1 + 1e-9) + 1e-9
+        ratio = smooth_motion_speed_ratio_limit(phi_max, self.w2)
+        if math.isfinite(ratio):
+            bounded = ratio * (speed + SPEED_EPSILON)
+            radius[has_history] = bounded[has_history] * (1 + 1e-9) + 1e-9
         return radius
 
 
 @dataclass(frozen=True)
-class CombinedModel:
-    """How individual costs combine into one frame's assignment weights.
+class ProximalUniformity(IndividualModel, key="im3"):
+    """IM3, Rangarajan and Shah's proximal uniformity (:func:`proximal_uniformity_cost`)."""
 
-    Attributes
-    ----------
-    name : {"cm1", "cm2"}
-        CM1 generalised mean (weights ``c**z``); CM2 deviation conditioned on competition and
-        alternatives (``c - w1 * mean alternatives - w2 * mean competitors``, over gated pairs).
-    z : float
-        CM1 exponent; larger z penalises large deviations more.
-    w1, w2 : float
-        CM2 weights of the head's alternatives and the measurement's competitors.
-    """
-
-    name: str = "cm1"
-    z: float = 1.0
-    w1: float = 0.0
-    w2: float = 0.0
+    name: str = "im3"
 
     def __post_init__(self) -> None:
-        if self.name not in ("cm1", "cm2"):
-            raise ValueError(f"unknown combined model {self.name!r}; choose cm1 or cm2")
-        if self.z <= 0:
-            raise ValueError(f"CM1 exponent z must be positive, got {self.z}")
-        if self.w1 < 0 or self.w2 < 0:
-            raise ValueError("CM2 weights must be non-negative")
+        self._check_name()
+
+    def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
+        return proximal_uniformity_cost(candidates)
+
+
+class CombinedModel(_Registered):
+    """A combined motion model: how one frame's individual costs become assignment weights.
+
+    ``CombinedModel("cm2", w1=0.5, w2=0.5)`` builds the model registered as "cm2"
+    (:data:`COMBINED_MODELS`); the default is "cm1".
+
+    Examples
+    --------
+    >>> CombinedModel("cm1", z=2.0).weights(np.array([0.1, 0.2]), np.array([0, 1]), np.array([0, 1]))
+    array([0.01, 0.04])
+    """
+
+    _kind = "combined model"
+    _default = "cm1"
+    name: str
 
     def unmatched_weight(self, phi_max: float) -> float:
         """Weight of a slave (missed point) or a false track (spurious measurement)."""
-        return phi_max**self.z if self.name == "cm1" else phi_max
+        return phi_max
 
     def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
         """Assignment weight of each pair that survived pruning.
@@ -281,9 +393,49 @@ class CombinedModel:
         head, measurement : ndarray of int, shape (P,)
             The pairs' head and measurement indices (CM2 averages over each one's other pairs).
         """
-        if self.name == "cm1":
-            return cost**self.z
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class GeneralisedMean(CombinedModel, key="cm1"):
+    """CM1, the generalised mean: weights ``c**z``; larger z penalises large deviations more."""
+
+    name: str = "cm1"
+    z: float = 1.0
+
+    def __post_init__(self) -> None:
+        self._check_name()
+        if self.z <= 0:
+            raise ValueError(f"CM1 exponent z must be positive, got {self.z}")
+
+    def unmatched_weight(self, phi_max: float) -> float:
+        return phi_max**self.z
+
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+        return cost**self.z
+
+
+@dataclass(frozen=True)
+class ConditionedDeviation(CombinedModel, key="cm2"):
+    """CM2, deviation conditioned on alternatives and competition: ``c - w1 * mean alternatives
+    - w2 * mean competitors``, over the gated pairs of the head and of the measurement."""
+
+    name: str = "cm2"
+    w1: float = 0.0
+    w2: float = 0.0
+
+    def __post_init__(self) -> None:
+        self._check_name()
+        if self.w1 < 0 or self.w2 < 0:
+            raise ValueError("CM2 weights must be non-negative")
+
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
         return cost - self.w1 * _mean_of_others(cost, head) - self.w2 * _mean_of_others(cost, measurement)
+
+
+# Every model by the name the options and configurations use.
+INDIVIDUAL_MODELS: dict[str, type] = IndividualModel._registry
+COMBINED_MODELS: dict[str, type] = CombinedModel._registry
 
 
 def _mean_of_others(cost: np.ndarray, group: np.ndarray) -> np.ndarray:
@@ -294,3 +446,27 @@ def _mean_of_others(cost: np.ndarray, group: np.ndarray) -> np.ndarray:
     totals = np.bincount(inverse, weights=cost)
     others = counts[inverse] - 1
     return np.divide(totals[inverse] - cost, others, out=np.zeros_like(cost), where=others > 0)
+
+
+def acceptable_links(
+    model: IndividualModel, candidates: Candidates, phi_max: float, limits: SpeedLimits
+) -> tuple[Candidates, np.ndarray]:
+    """The candidate links that pass the speed gate and cost at most phi_max, with their cost.
+
+    Parameters
+    ----------
+    model : IndividualModel
+    candidates : Candidates
+    phi_max : float
+        Largest individual cost of a link.
+    limits : SpeedLimits
+        The speed gate, and the scale of the IM1 fallback (taken over the pairs it admits).
+
+    Returns
+    -------
+    Candidates, ndarray of float (P',)
+    """
+    candidates = candidates.subset(limits.admits(candidates.velocity))
+    cost = model.cost(candidates, phi_max, limits.scale(candidates.velocity))
+    keep = cost <= phi_max
+    return candidates.subset(keep), cost[keep]

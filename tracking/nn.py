@@ -14,7 +14,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .assignment import UNASSIGNED, solve_split
 from .initialisation import pairs_within
-from .tracks import Tracks, check_limit, point_frames, tracks_from_links
+from .tracks import Tracks, check_limit, order_independent, point_frames, tracks_from_links
 
 
 def link_nearest(before: np.ndarray, after: np.ndarray, d_max: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -47,6 +47,7 @@ def link_nearest(before: np.ndarray, after: np.ndarray, d_max: float | None) -> 
     return rows, chosen[rows]
 
 
+@order_independent
 def nearest_neighbour(
     frames: Sequence[np.ndarray],
     d_max: float | None = None,

@@ -320,7 +320,7 @@ def track_without_drift(
     if not shift.any():
         return track(list(frames))
     tracks = track([np.asarray(f, dtype=float).reshape(-1, 2) - k * shift for k, f in enumerate(frames)])
-    return replace(tracks, xy=tracks.xy + np.arange(tracks.n_frames)[None, :, None] * shift)
+    return tracks.shifted(drift)
 
 
 def step_sigma(lengths: np.ndarray, reach: np.ndarray) -> float:

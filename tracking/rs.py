@@ -17,7 +17,7 @@ import numpy as np
 
 from .motion import Candidates, proximal_uniformity_cost
 from .nn import link_nearest
-from .tracks import NO_MEASUREMENT, Tracks, check_limit, point_frames
+from .tracks import NO_MEASUREMENT, Tracks, check_limit, order_independent, point_frames
 
 
 def greedy_conditioned_assignment(cost: np.ndarray) -> np.ndarray:
@@ -64,6 +64,7 @@ def greedy_conditioned_assignment(cost: np.ndarray) -> np.ndarray:
     return result
 
 
+@order_independent
 def rangarajan_shah(
     frames: Sequence[np.ndarray],
     d_max: float | None = None,
@@ -105,7 +106,7 @@ def rangarajan_shah(
     measurement = np.full((m, n_frames), NO_MEASUREMENT, dtype=np.int64)
     xy = np.full((m, n_frames, 2), np.nan)
     if n_frames == 0 or m == 0:
-        return Tracks(xy=xy, measurement=measurement, first_frame=first_frame)
+        return Tracks.from_dense(xy=xy, measurement=measurement, first_frame=first_frame)
     columns = min(initial.shape[1], n_frames)
     measurement[:, :columns] = initial[:, :columns]
     for k in range(columns):
@@ -129,7 +130,7 @@ def rangarajan_shah(
         xy[held, k] = points[choice[held]]
         xy[~held, k] = position[~held] + np.nan_to_num(velocity[~held])
         velocity = np.where(held[:, None], xy[:, k] - position, velocity)
-    return Tracks(xy=xy, measurement=measurement, first_frame=first_frame)
+    return Tracks.from_dense(xy=xy, measurement=measurement, first_frame=first_frame)
 
 
 def _pair_costs(position: np.ndarray, velocity: np.ndarray, points: np.ndarray, d_max: float | None) -> np.ndarray:

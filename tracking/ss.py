@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from .motion import smooth_motion_cost
-from .tracks import Tracks, check_limit, point_frames, tracks_from_links
+from .tracks import Tracks, check_limit, order_independent, point_frames, tracks_from_links
 
 # The cost of a triplet that breaks a constraint: large enough that removing one always pays
 # more than any sum of allowed costs, small enough that gains stay exact in float64.
@@ -24,6 +24,7 @@ _FORBIDDEN = 1e6
 _TOLERANCE = 1e-9
 
 
+@order_independent
 def sethi_jain(
     frames: Sequence[np.ndarray],
     phi_max: float = 0.1,

@@ -19,7 +19,7 @@ from .linking import link_goa
 from .nn import nearest_neighbour
 from .rs import rangarajan_shah
 from .ss import sethi_jain
-from .tracks import Tracks, link_speed_limit
+from .tracks import Tracks, link_speed_limit, order_independent
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,7 @@ def estimate_speed_limit(frames: Sequence[np.ndarray]) -> float:
     return link_speed_limit(goa_updown(frames))
 
 
+@order_independent
 def _ipan(frames, max_speed, first_frame):
     limit = max_speed if max_speed is not None else estimate_speed_limit(frames)
     return ipan(frames, IPANConfig(v_max=limit), first_frame)

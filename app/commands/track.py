@@ -11,7 +11,7 @@ from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_table, write_table
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import GOA_FAMILY
-from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, CombinedModel, IndividualModel
 from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
@@ -95,13 +95,13 @@ def add_parser(subparsers) -> None:
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
-        choices=("im1", "im2", "im3"),
+        choices=tuple(INDIVIDUAL_MODELS),
         default=None,
         help="cost of one link: im1 nearest neighbour, im2 smooth motion (default), im3 proximal uniformity",
     )
     group.add_argument(
         "--combined-model",
-        choices=("cm1", "cm2"),
+        choices=tuple(COMBINED_MODELS),
         default=None,
         help="how link costs add up in a frame: cm1 sum (default), cm2 conditioned on competitors",
     )

@@ -49,9 +49,10 @@ def time_updown(frames: list[np.ndarray], config: GOAConfig) -> tuple[float, flo
     stamps = [time.process_time()]
     goa_updown(frames, config, progress=lambda _: stamps.append(time.process_time()))
     steps = np.diff(stamps)
-    # Progress comes after each step of a pass, then once at the end of each pass.
-    per_pass = len(frames) - 2
-    up, down = steps[:per_pass], steps[per_pass + 1 : 2 * per_pass + 1]
+    # Progress comes after each frame step of a pass; the first step of each pass only takes
+    # its first links.
+    n = len(frames)
+    up, down = steps[1 : n - 1], steps[n : 2 * n - 2]
     return float(np.median(up)), float(np.median(down)), stamps[-1] - stamps[0], first
 
 

@@ -31,7 +31,7 @@ def scene(rng: np.random.Generator) -> tuple[list[np.ndarray], Tracks]:
     steps = rng.normal(0, 6, (TRACKS, FRAMES, 2)) + rng.normal(0, 6, (TRACKS, 1, 2))
     xy = start[:, None] + np.cumsum(steps, axis=1)
     measurement = np.where(rng.random((TRACKS, FRAMES)) < 0.1, -1, 0)
-    return frames, Tracks(xy=xy, measurement=measurement)
+    return frames, Tracks.from_dense(xy=xy, measurement=measurement)
 
 
 def frames_per_second(render, count: int, repeats: int = 5) -> float:
