@@ -23,6 +23,7 @@ from seedtrack.data.video import write_video
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
 from seedtrack.detection.roi import Circle, circle_mask, dish_mask
+from seedtrack.detection.choice import DetectorChoice, choose_detector
 from seedtrack.detection.spots import detect_spots
 from seedtrack.tracking.goa import GOAConfig, goa_updown, pass_steps
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
@@ -34,7 +35,7 @@ from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_l
 from .progress import progress_bar
 from .wording import counted
 
-DETECTORS = {"blob": detect_blobs, "log": detect_spots}
+DETECTORS = ("auto", "blob", "spot")
 # Frames whose per-pixel median is a static scene's background: spread over the clip.
 _BACKGROUND_FRAMES = 64
 
@@ -47,9 +48,12 @@ class DetectionSettings:
     ----------
     options : BlobOptions
         Polarity ("auto" is decided once, on the first frame), background, threshold, areas.
-    detector : {"blob", "log"}
-        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`) or Laplacian-of-Gaussian spots
-        (:func:`seedtrack.detection.spots.detect_spots`).
+    detector : {"auto", "blob", "spot"}
+        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`), Crocker-Grier spots
+        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame
+        (:func:`seedtrack.detection.choice.choose_detector`).
+    diameter : int or None
+        Spot diameter, pixels, odd; None estimates it from the first frame.
     roi : "auto", "none", Circle or Path
         Region of interest: the dish found on the first frame (whole frame if there is none
         clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
@@ -58,7 +62,8 @@ class DetectionSettings:
     """
 
     options: BlobOptions = BlobOptions()
-    detector: str = "blob"
+    detector: str = "auto"
+    diameter: int | None = None
     roi: str | Circle | Path = "auto"
     start: int = 0
     end: int | None = None
@@ -110,6 +115,8 @@ class ClipDetections:
         The dish found or the circle given, when the region is a circle.
     preview : ndarray of uint8, shape (H, W, 3), or None
         The frame asked for as a preview, as read.
+    choice : DetectorChoice
+        The detector that ran, its settings and why.
     """
 
     detections: Detections
@@ -117,10 +124,16 @@ class ClipDetections:
     roi: np.ndarray | None
     circle: Circle | None
     preview: np.ndarray | None
+    choice: DetectorChoice
 
 
-def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None) -> ClipDetections:
+def detect_clip(
+    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, say: Callable[[str], None] = print
+) -> ClipDetections:
     """Detect objects in every frame of a clip, with a progress bar.
+
+    The detector is chosen on the first frame (see :class:`DetectionSettings`) and the choice
+    said on one ``detector: ...`` line.
 
     A video that breaks off part way keeps the frames decoded before, and one line on standard
     error says where it stopped.
@@ -150,8 +163,8 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         roi, circle = _given_roi(settings.roi, source.size)
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detect = DETECTORS[settings.detector]
         options = settings.options
+        choice = None
         indices: list[int] = []
         columns: list[dict[str, np.ndarray]] = []
         preview = None
@@ -164,8 +177,13 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
                     if options.polarity == "auto":
                         # Once per clip: a frame with little in it must not flip it.
                         options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
+                    choice = choose_detector(gray, options.polarity, detector=settings.detector, diameter=settings.diameter, roi=roi)
+                    say(f"detector: {choice.reason}")
                 indices.append(index)
-                columns.append(detect(gray, options, background=background, roi=roi))
+                if choice.spots is not None:
+                    columns.append(detect_spots(gray, choice.spots, roi=roi))
+                else:
+                    columns.append(detect_blobs(gray, options, background=background, roi=roi))
                 if index == preview_frame:
                     preview = image.copy()
                 bar.update(1)
@@ -173,7 +191,7 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
             raise DataError(path, source.stopped_early or "no frame could be read")
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(indices), 'frame')} before it", file=sys.stderr)
-        return ClipDetections(Detections(np.array(indices), columns), source.fps, roi, circle, preview)
+        return ClipDetections(Detections(np.array(indices), columns), source.fps, roi, circle, preview, choice)
 
 
 def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> tuple[np.ndarray | None, Circle | None]:
