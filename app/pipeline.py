@@ -177,11 +177,12 @@ def detect_clip(
                     if options.polarity == "auto":
                         # Once per clip: a frame with little in it must not flip it.
                         options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
-                    choice = choose_detector(gray, options.polarity, detector=settings.detector, diameter=settings.diameter, roi=roi)
+                    scene = gray if background is None else gray.astype(np.float32) - background
+                    choice = choose_detector(scene, options.polarity, detector=settings.detector, diameter=settings.diameter, roi=roi)
                     say(f"detector: {choice.reason}")
                 indices.append(index)
                 if choice.spots is not None:
-                    columns.append(detect_spots(gray, choice.spots, roi=roi))
+                    columns.append(detect_spots(gray, choice.spots, roi=roi, background=background))
                 else:
                     columns.append(detect_blobs(gray, options, background=background, roi=roi))
                 if index == preview_frame:

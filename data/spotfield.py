@@ -1,8 +1,9 @@
 """Generated frames of Gaussian spots of known position, as in the ISBI particle tracking challenge.
 
 Spots are Gaussian (point spread function of standard deviation ``sigma``) on a flat background,
-imaged with Poisson (shot) noise and Gaussian read noise. The signal-to-noise ratio is the spot's
-peak above the background over the noise's standard deviation at the background. Some spots
+imaged with Poisson (shot) noise and Gaussian read noise. The signal-to-noise ratio is, as in the
+challenge (Chenouard et al., Nature Methods 11, 281, 2014), the spot's peak above the background
+over the noise's standard deviation at the peak: SNR = A / sqrt(background + A + read_noise^2). Some spots
 lie in touching pairs (centres ``touching_distance`` sigmas apart), and some are out of focus: a
 bright core inside a dark ring, as a defocused bead shows under bright-field light. Positions
 are in pixels, x to the right and y down, pixel centres at integer coordinates.
@@ -32,7 +33,7 @@ class SpotFieldSpec:
     sigma : float
         Standard deviation of a spot, pixels.
     snr : float
-        Peak above the background over the noise's standard deviation at the background.
+        Peak above the background over the noise's standard deviation at the peak.
     background : float
         Background level, photons per pixel.
     read_noise : float
@@ -49,8 +50,8 @@ class SpotFieldSpec:
     rings: int = 10
     sigma: float = 1.5
     snr: float = 4.0
-    background: float = 100.0
-    read_noise: float = 3.0
+    background: float = 10.0
+    read_noise: float = 1.0
     touching_distance: float = 4.0
     random_seed: int = 0
 
@@ -102,8 +103,9 @@ def make_spot_field(spec: SpotFieldSpec) -> SpotField:
     kind[: spec.touching_pairs] = "touching"
     xy = np.concatenate([centres, partners])
     kind = np.concatenate([kind, np.array(["touching"] * spec.touching_pairs, dtype=object)])
-    noise_sigma = np.sqrt(spec.background + spec.read_noise**2)
-    amplitude = spec.snr * noise_sigma
+    # A = snr * sqrt(background + A + read^2), solved for A.
+    floor = spec.background + spec.read_noise**2
+    amplitude = (spec.snr**2 + np.sqrt(spec.snr**4 + 4 * spec.snr**2 * floor)) / 2
     rows, columns = np.mgrid[0 : spec.height, 0 : spec.width].astype(np.float32)
     photons = np.full((spec.height, spec.width), spec.background, np.float32)
     reach = int(np.ceil(5 * spec.sigma))
