@@ -32,7 +32,7 @@ _NOISE_SIGMA_PX = 1.0
 # The disc is moved a pixel when the centroid lies further than this from its centre, pixels.
 _SHIFT_PX = 0.6
 # A spot within a diameter of one this many times heavier is its halo, not a spot.
-_HALO_RATIO = 5.0
+_HALO_RATIO = 3.0
 # Most moves of the disc per spot, and steps of the Gaussian-windowed centroid.
 _MAX_ITERATIONS = 10
 _WINDOW_ITERATIONS = 4
