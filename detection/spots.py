@@ -136,6 +136,7 @@ def band_pass(gray: np.ndarray, diameter: int, polarity: str = "light") -> np.nd
     return cv2.multiply(result, -1.0) if polarity == "dark" else result
 
 
+@functools.lru_cache(maxsize=None)
 def _disc(radius: int) -> tuple[np.ndarray, np.ndarray]:
     """Row and column offsets of the pixels within ``radius`` of a centre."""
     dy, dx = np.mgrid[-radius : radius + 1, -radius : radius + 1]
@@ -349,9 +350,11 @@ def detect_spots(
     # the maxima of one spot that this leaves meet when refined and are merged.
     side = 2 * int(np.ceil(0.8 * radius)) + 1
     local_max = cv2.dilate(positive, np.ones((side, side), np.uint8))
-    rows, columns = np.nonzero((positive == local_max) & (positive > 0))
-    if rows.size == 0:
+    peaks = cv2.bitwise_and(cv2.compare(positive, local_max, cv2.CMP_EQ), cv2.compare(positive, 0.0, cv2.CMP_GT))
+    found = cv2.findNonZero(peaks)
+    if found is None:
         return _empty()
+    columns, rows = found.reshape(-1, 2).T.astype(np.intp)
     padded = cv2.copyMakeBorder(positive, radius, radius, radius, radius, cv2.BORDER_CONSTANT, value=0)
     dy, dx = _disc(radius)
     window = (diameter - 1) / 4
@@ -395,9 +398,13 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
     """
     ox = np.zeros(len(weights)) if start is None else start[0]
     oy = np.zeros(len(weights)) if start is None else start[1]
+    radius = int(dx.max())
     for _ in range(_WINDOW_ITERATIONS):
-        gauss = np.exp(-((dx[None, :] - ox[:, None]) ** 2 + (dy[None, :] - oy[:, None]) ** 2) / (2 * window**2))
-        w = weights * gauss
+        # The window is separable: one exponential per row and column offset of each disc.
+        span = np.arange(-radius, radius + 1)
+        across = np.exp(-((span[None, :] - ox[:, None]) ** 2) / (2 * window**2))
+        down = np.exp(-((span[None, :] - oy[:, None]) ** 2) / (2 * window**2))
+        w = weights * across[:, dx + radius] * down[:, dy + radius]
         total = np.maximum(w.sum(axis=1), 1e-30)
         ox, oy = (w * dx).sum(axis=1) / total, (w * dy).sum(axis=1) / total
     return ox, oy
