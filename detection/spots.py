@@ -31,7 +31,13 @@ from .blobs import MEASUREMENT_COLUMNS, eccentricity
 _NOISE_SIGMA_PX = 1.0
 # The disc is moved a pixel when the centroid lies further than this from its centre, pixels.
 _SHIFT_PX = 0.6
-# A spot within a diameter of one this many times heavier is its halo, not a spot.
+# A spot's centre stands this many floors (band-passed noise deviations) above the wide
+# background.
+_STANDING_FLOORS = 2.0
+# A spot within this many diameters of one this many times heavier is its halo, not a spot (the
+# running mean over a diameter about a strong spot is pulled up, about a dark ring down; the
+# wide-background test catches the halo further out).
+_HALO_REACH = 1.0
 _HALO_RATIO = 3.0
 # Most moves of the disc per spot, and steps of the Gaussian-windowed centroid.
 _MAX_ITERATIONS = 10
@@ -129,11 +135,26 @@ def band_pass(gray: np.ndarray, diameter: int, polarity: str = "light") -> np.nd
     >>> bool(band_pass(frame, 7)[10, 10] > 0)
     True
     """
+    return _band_and_smooth(gray, diameter, polarity)[0]
+
+
+def _band_and_smooth(gray: np.ndarray, diameter: int, polarity: str) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`band_pass` and the frame smoothed by the noise Gaussian, both spots positive."""
     signal = np.asarray(gray, np.float32)
+    if polarity == "dark":
+        signal = cv2.multiply(signal, -1.0)
     smooth = cv2.GaussianBlur(signal, (0, 0), _NOISE_SIGMA_PX, borderType=cv2.BORDER_REFLECT)
     background = cv2.boxFilter(signal, -1, (diameter, diameter), borderType=cv2.BORDER_REFLECT)
-    result = cv2.subtract(smooth, background)
-    return cv2.multiply(result, -1.0) if polarity == "dark" else result
+    return cv2.subtract(smooth, background), smooth
+
+
+def _wide_background(smooth: np.ndarray, diameter: int) -> np.ndarray:
+    """The background over about 4 diameters: a 5 x 5 median of a copy shrunk that much (a
+    median, so that spots and dark rings barely move it)."""
+    height, width = smooth.shape
+    shrink = max(1, min(int(round(4 * diameter / 5)), height // 5, width // 5))
+    small = cv2.resize(smooth, (max(1, width // shrink), max(1, height // shrink)), interpolation=cv2.INTER_AREA)
+    return cv2.resize(cv2.medianBlur(small, 5), (width, height), interpolation=cv2.INTER_LINEAR)
 
 
 @functools.lru_cache(maxsize=None)
@@ -339,7 +360,7 @@ def detect_spots(
         raise ValueError(f"region of interest is {roi.shape[1]}x{roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
     diameter = settings.diameter
     radius = diameter // 2
-    band = band_pass(gray, diameter, settings.polarity)
+    band, smooth = _band_and_smooth(gray, diameter, settings.polarity)
     # Only light standing out of the noise counts for centroids and mass (Crocker and Grier
     # clip the band-passed frame at a low level).
     positive = cv2.threshold(band, settings.floor, 0, cv2.THRESH_TOZERO)[1]
@@ -360,6 +381,11 @@ def detect_spots(
     window = (diameter - 1) / 4
     rows, columns, mass, weights = _refine(padded, rows, columns, dy, dx, settings.min_mass, window)
     keep = mass > settings.min_mass
+    rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
+    # A spot is lighter than the wide background around it, not only than the running mean
+    # over its diameter, which a dark ring pulls down into a light halo about it.
+    wide = _wide_background(smooth, diameter)
+    keep = smooth[rows, columns] - wide[rows, columns] > _STANDING_FLOORS * settings.floor
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     if rows.size == 0:
         return _empty()
@@ -456,7 +482,7 @@ def _without_duplicates(x: np.ndarray, y: np.ndarray, mass: np.ndarray, radius: 
     (the light halo the running mean leaves around a strong spot, above all one ringed dark);
     returns the kept x, y and their indices into the input."""
     order = np.argsort(-mass, kind="stable")
-    pairs = cKDTree(np.column_stack((x, y))).query_pairs(2 * max(radius, 1), output_type="ndarray")
+    pairs = cKDTree(np.column_stack((x, y))).query_pairs(_HALO_REACH * (2 * radius + 1), output_type="ndarray")
     if len(pairs) == 0:
         return x, y, np.arange(x.size)
     rank = np.empty_like(order)
