@@ -87,16 +87,17 @@ def make_spot_field(spec: SpotFieldSpec) -> SpotField:
     Example
     -------
     >>> field = make_spot_field(SpotFieldSpec(width=64, height=64, spots=4, touching_pairs=1, rings=1))
-    >>> field.image.shape, field.xy.shape, sorted(set(field.kind))
+    >>> field.image.shape, field.xy.shape, sorted(set(field.kind.tolist()))
     ((64, 64), (4, 2), ['ring', 'single', 'touching'])
     """
     rng = np.random.default_rng(spec.random_seed)
     margin = 6 * spec.sigma
     apart = 8 * spec.sigma
-    singles = spec.spots - 2 * spec.touching_pairs
-    centres = _dart_throw(rng, singles, spec.width, spec.height, margin, apart)
-    kind = np.array(["single"] * singles, dtype=object)
-    kind[singles - spec.rings :] = "ring"
+    # Spots placed apart: first the anchors of the touching pairs, last the rings.
+    placed = spec.spots - spec.touching_pairs
+    centres = _dart_throw(rng, placed, spec.width, spec.height, margin, apart)
+    kind = np.array(["single"] * placed, dtype=object)
+    kind[placed - spec.rings :] = "ring"
     # Partners of the first spots, touching them in a random direction.
     angle = rng.uniform(0, 2 * np.pi, spec.touching_pairs)
     partners = centres[: spec.touching_pairs] + spec.touching_distance * spec.sigma * np.column_stack((np.cos(angle), np.sin(angle)))

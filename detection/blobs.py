@@ -91,7 +91,7 @@ def to_gray(image: np.ndarray) -> np.ndarray:
 
     Example
     -------
-    >>> to_gray(np.full((2, 2), 4095, np.uint16)).max()
+    >>> int(to_gray(np.full((2, 2), 4095, np.uint16)).max())
     255
     """
     if image.dtype != np.uint8:

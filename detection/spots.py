@@ -4,9 +4,11 @@ The method of Crocker and Grier (J. Colloid Interface Sci. 179, 298, 1996), writ
 frame is band-passed (a Gaussian of 1 px takes off pixel noise, a running mean over the spot's
 diameter takes off the background), every local maximum of the band-passed frame is a candidate,
 its centre is refined to sub-pixel by the brightness centroid over a disc of the spot's radius,
-the disc following the centroid pixel by pixel until it sits within 0.6 px of it, and a spot is
-kept when its integrated brightness (*mass*, the band-passed frame summed over the disc) stands
-well out of the noise, which is measured on the frame, not assumed.
+the disc following the centroid pixel by pixel until it sits within 0.6 px of it (the light
+weighted by a Gaussian window of the spot's size, so that a touching neighbour does not pull the
+centre over), and a spot is kept when its integrated brightness (*mass*, the band-passed frame
+summed over the disc) stands well out of the noise, which is measured on the frame, not assumed;
+when it stands above the wider background too; and when it is not the halo of a heavier spot.
 
 Everything is computed in float32 on the data's own values, so 8-bit, 16-bit and float frames of
 the same content give the same spots. The settings that describe the clip (the spot's diameter,
@@ -21,7 +23,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from scipy.spatial import cKDTree
 
 from .blobs import MEASUREMENT_COLUMNS, eccentricity
@@ -378,6 +379,8 @@ def detect_spots(
     columns, rows = found.reshape(-1, 2).T.astype(np.intp)
     padded = cv2.copyMakeBorder(positive, radius, radius, radius, radius, cv2.BORDER_CONSTANT, value=0)
     dy, dx = _disc(radius)
+    # diameter - 1 is 6 sigma of the spot: a window of 1.5 sigma, wide enough that a defocused
+    # bead's centre does not hop between its lobes, narrow enough to keep a neighbour out.
     window = (diameter - 1) / 4
     rows, columns, mass, weights = _refine(padded, rows, columns, dy, dx, settings.min_mass, window)
     keep = mass > settings.min_mass
@@ -412,7 +415,7 @@ def detect_spots(
     return {name: values[order] for name, values in table.items()}
 
 
-def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float, start: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
     """Brightness centroid of each disc (offsets from its centre, pixels), each pixel's light
     weighted by a Gaussian window of the spot's sigma about the estimate, iterated from the
     disc's centre to a fixed point.
@@ -422,8 +425,7 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
     window (the Gaussian mask estimator, Thompson, Larson and Webb 2002) weighs pixels as the
     spot's own light does, close to the best a centroid can do on a Gaussian spot.
     """
-    ox = np.zeros(len(weights)) if start is None else start[0]
-    oy = np.zeros(len(weights)) if start is None else start[1]
+    ox, oy = np.zeros(len(weights)), np.zeros(len(weights))
     radius = int(dx.max())
     for _ in range(_WINDOW_ITERATIONS):
         # The window is separable: one exponential per row and column offset of each disc.
