@@ -149,13 +149,22 @@ def _band_and_smooth(gray: np.ndarray, diameter: int, polarity: str) -> tuple[np
     return cv2.subtract(smooth, background), smooth
 
 
-def _wide_background(smooth: np.ndarray, diameter: int) -> np.ndarray:
-    """The background over about 4 diameters: a 5 x 5 median of a copy shrunk that much (a
-    median, so that spots and dark rings barely move it)."""
+def _wide_background(smooth: np.ndarray, diameter: int, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """The background over about 4 diameters at the given pixels: a 5 x 5 median of a copy
+    shrunk that much (a median, so that spots and dark rings barely move it), read off with
+    bilinear interpolation."""
     height, width = smooth.shape
     shrink = max(1, min(int(round(4 * diameter / 5)), height // 5, width // 5))
-    small = cv2.resize(smooth, (max(1, width // shrink), max(1, height // shrink)), interpolation=cv2.INTER_AREA)
-    return cv2.resize(cv2.medianBlur(small, 5), (width, height), interpolation=cv2.INTER_LINEAR)
+    small = cv2.medianBlur(cv2.resize(smooth, (max(1, width // shrink), max(1, height // shrink)), interpolation=cv2.INTER_AREA), 5)
+    # Pixel centres of the shrunk copy sit at (i + 0.5) * scale - 0.5 in the frame.
+    u = np.clip((columns + 0.5) * small.shape[1] / width - 0.5, 0, small.shape[1] - 1)
+    v = np.clip((rows + 0.5) * small.shape[0] / height - 0.5, 0, small.shape[0] - 1)
+    u0, v0 = np.minimum(u.astype(int), small.shape[1] - 2).clip(0), np.minimum(v.astype(int), small.shape[0] - 2).clip(0)
+    fu, fv = u - u0, v - v0
+    u1, v1 = np.minimum(u0 + 1, small.shape[1] - 1), np.minimum(v0 + 1, small.shape[0] - 1)
+    top = small[v0, u0] * (1 - fu) + small[v0, u1] * fu
+    bottom = small[v1, u0] * (1 - fu) + small[v1, u1] * fu
+    return top * (1 - fv) + bottom * fv
 
 
 @functools.lru_cache(maxsize=None)
@@ -387,8 +396,7 @@ def detect_spots(
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     # A spot is lighter than the wide background around it, not only than the running mean
     # over its diameter, which a dark ring pulls down into a light halo about it.
-    wide = _wide_background(smooth, diameter)
-    keep = smooth[rows, columns] - wide[rows, columns] > _STANDING_FLOORS * settings.floor
+    keep = smooth[rows, columns] - _wide_background(smooth, diameter, rows, columns) > _STANDING_FLOORS * settings.floor
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     if rows.size == 0:
         return _empty()
@@ -417,25 +425,28 @@ def detect_spots(
 
 def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
     """Brightness centroid of each disc (offsets from its centre, pixels), each pixel's light
-    weighted by a Gaussian window of the spot's sigma about the estimate, iterated from the
-    disc's centre to a fixed point.
+    weighted by a Gaussian window of standard deviation ``window`` about the estimate, iterated
+    from the disc's centre towards a fixed point.
 
     A flat disc weighs every pixel alike: the noise far from the centre moves the centroid as
     much as the light at it, and a touching neighbour's light pulls it over. The Gaussian
     window (the Gaussian mask estimator, Thompson, Larson and Webb 2002) weighs pixels as the
     spot's own light does, close to the best a centroid can do on a Gaussian spot.
     """
-    ox, oy = np.zeros(len(weights)), np.zeros(len(weights))
+    ox, oy = np.zeros(len(weights), np.float32), np.zeros(len(weights), np.float32)
     radius = int(dx.max())
+    span = np.arange(-radius, radius + 1, dtype=np.float32)
+    # One product gives each disc's light and its two first moments.
+    moments = np.stack([np.ones_like(dx), dx, dy], axis=1).astype(np.float32)
+    scale = np.float32(-1 / (2 * window**2))
     for _ in range(_WINDOW_ITERATIONS):
         # The window is separable: one exponential per row and column offset of each disc.
-        span = np.arange(-radius, radius + 1)
-        across = np.exp(-((span[None, :] - ox[:, None]) ** 2) / (2 * window**2))
-        down = np.exp(-((span[None, :] - oy[:, None]) ** 2) / (2 * window**2))
-        w = weights * across[:, dx + radius] * down[:, dy + radius]
-        total = np.maximum(w.sum(axis=1), 1e-30)
-        ox, oy = (w * dx).sum(axis=1) / total, (w * dy).sum(axis=1) / total
-    return ox, oy
+        across = np.exp(scale * (span[None, :] - ox[:, None]) ** 2)
+        down = np.exp(scale * (span[None, :] - oy[:, None]) ** 2)
+        total, sx, sy = ((weights * across[:, dx + radius] * down[:, dy + radius]) @ moments).T
+        total = np.maximum(total, np.float32(1e-30))
+        ox, oy = sx / total, sy / total
+    return ox.astype(float), oy.astype(float)
 
 
 def _refine(
