@@ -95,6 +95,7 @@ def test_mask_image_limits_the_search(dish, tmp_path):
         (["--roi", "10,10"], "--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; '10,10' is none"),
         (["--roi", "{folder}/missing.png"], "--roi takes auto, none, a circle X,Y,R"),
         (["--detector", "spot", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
+        (["--diameter", "4"], "--diameter must be an odd number of pixels >= 3, got 4"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed (0..3)"),
         (["--preview", "{folder}/p.txt"], "name an image file"),
     ],
