@@ -15,6 +15,7 @@ from typing import Iterable, Iterator, Sequence
 
 import cv2
 import numpy as np
+from PIL import Image, ImageDraw, ImageFont
 from scipy.spatial import cKDTree
 
 from seedtrack.tracking.tracks import Tracks
@@ -44,7 +45,13 @@ _NEUTRAL = (235, 235, 235)
 
 # Sub-pixel drawing: OpenCV takes integer coordinates scaled by 2**SHIFT.
 SHIFT = 4
-_FONT = cv2.FONT_HERSHEY_SIMPLEX
+# Text sizes are given as OpenCV font scales (as cv2.putText takes them); a scale of 1 is a
+# TrueType font of this many pixels, about the height OpenCV's Hershey font has at scale 1.
+_PIXELS_PER_FONT_SCALE = 30
+# Heads are rings this many times the style's radius: the object inside stays visible.
+_RING = 1.6
+# Start and end marks, in the style's marker sizes.
+_MARK_SIZE = 1.6
 # A detection this close to a measured track point (pixels) is that point.
 FALSE_DETECTION_TOLERANCE = 0.5
 
@@ -256,20 +263,33 @@ class TrackLayer:
             alpha = np.round(255 * (self.trail - age) / self.trail).astype(int)
             warned, group = self._link_colours(rows, ends)
             _draw_faded(canvas, points, group, self._link_palette, alpha, warned, style.line)
+        taken = Occupancy(canvas.shape[:2])
         # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
-        self._draw_marks(canvas, column - self.trail, column, style)
+        self._draw_marks(canvas, column - self.trail, column, style, taken)
         present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
-        _draw_heads(canvas, self.xy[present, column], self.colour_index[present], self._colours, self.hollow[present, column], style)
+        heads = self.xy[present, column]
+        draw_heads(canvas, heads, self.colour_index[present], self._colours, self.hollow[present, column], style)
         if self.labels:
+            taken.add_points(heads, ring_radius(style))
             colours = [self._colours[index] for index in self.colour_index[present]]
-            _draw_labels(canvas, [self._texts[row] for row in present], self.xy[present, column], colours, style)
+            _draw_labels(canvas, [self._texts[row] for row in present], heads, colours, style, taken)
 
-    def _draw_marks(self, canvas: np.ndarray, low: int, high: int, style: Style) -> None:
-        """Mark the starts and ends that fall in columns ``low`` to ``high``."""
+    def _draw_marks(self, canvas: np.ndarray, low: int, high: int, style: Style, taken: Occupancy, size: float = _MARK_SIZE, spacing: float = 1.0) -> None:
+        """Mark the starts and ends that fall in columns ``low`` to ``high``, each only where no
+        mark drawn before it lies within ``spacing`` mark widths: on dense footage they would
+        hide the picture, and a sample of them says as much about where tracks begin and end.
+        ``size`` is in the style's marker sizes."""
+        width = style.marker * size
+        half = width * (0.5 + spacing)
+        spaced = Occupancy(canvas.shape[:2])
         for rows, columns, kind in ((self.starts, self.start_column, cv2.MARKER_TRIANGLE_UP), (self.ends, self.end_column, cv2.MARKER_SQUARE)):
             shown = (columns >= low) & (columns <= high)
             for row, at in zip(rows[shown], columns[shown]):
-                _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style)
+                x, y = self.xy[row, at]
+                if spaced.free(x - half, y - half, x + half, y + half, inside=False):
+                    spaced.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
+                    taken.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
+                    _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style, size)
 
     def _link_colours(self, rows: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each link is a warning, and its index into ``_link_palette`` (warnings last)."""
@@ -286,12 +306,18 @@ class TrackLayer:
         for index in np.unique(group):
             chosen = group == index
             cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in self._link_palette[index]), style.line, cv2.LINE_AA, SHIFT)
-        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style)
+        taken = Occupancy(canvas.shape[:2])
+        # Every start and end of a long clip at once: smaller marks, further apart than in a frame.
+        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style, taken, size=1.0, spacing=2.0)
         if self.labels:
             present = ~np.isnan(self.xy[..., 0])
+            # The longest tracks are labelled first: where labels must be left out, the short ones go.
             rows = np.flatnonzero(present.any(axis=1))
+            rows = rows[np.argsort(-present[rows].sum(axis=1), kind="stable")]
             starts = self.xy[rows, np.argmax(present[rows], axis=1)]
-            _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style)
+            # Ids of whole trajectories crowd more than a frame's: each keeps a label's height clear.
+            margin = text_size("0", style.font, style.text)[1]
+            _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style, taken, margin)
 
 
 def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
@@ -355,24 +381,53 @@ def _scratch(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     return _SCRATCH[shape]
 
 
-def _draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
-    """A disc at each measured position and a ring at each interpolated one, on a black halo.
+def draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
+    """A ring around each measured position and a dashed ring around each interpolated one, on a
+    black halo, so that the object itself stays in sight.
 
-    ``groups`` holds each head's index into ``colours``. Discs are drawn as zero-length lines
-    (round caps) in one call per colour, which is much faster than a circle per head.
+    ``groups`` holds each head's index into ``colours``. Rings are polygons drawn in one call per
+    colour, which is much faster than a circle per head.
+
+    Example
+    -------
+    >>> canvas = np.zeros((40, 40, 3), np.uint8)
+    >>> draw_heads(canvas, np.array([[20.0, 20.0]]), np.array([0]), [(0, 255, 0)], np.array([False]), Style.for_size((640, 480)))
+    >>> int(canvas[20, 20, 1]), int(canvas[20, 26, 1]) > 100  # the centre left alone, the ring green
+    (0, True)
     """
-    fixed = to_fixed(xy)
-    dots = np.repeat(fixed[~hollow][:, None], 2, axis=1)
-    size = max(3, round(2 * style.radius))
-    cv2.polylines(canvas, dots, False, _HALO, size + 2, cv2.LINE_AA, SHIFT)
-    solid = groups[~hollow]
-    for group in np.unique(solid):
-        cv2.polylines(canvas, dots[solid == group], False, colours[group], size, cv2.LINE_AA, SHIFT)
-    # Rings are larger than discs, so that the hole shows even at small sizes.
-    ring = int(round(style.radius * 1.4 * (1 << SHIFT)))
-    for centre, group in zip(map(tuple, fixed[hollow].tolist()), groups[hollow].tolist()):
-        cv2.circle(canvas, centre, ring, _HALO, style.line + 2, cv2.LINE_AA, SHIFT)
-        cv2.circle(canvas, centre, ring, colours[group], style.line, cv2.LINE_AA, SHIFT)
+    if not len(xy):
+        return
+    radius = style.radius * _RING
+    # As few vertices as keep the polygon within 0.3 pixels of the circle (an edge of length L
+    # bulges L**2 / 8r from it), a multiple of 4 to make whole dashes.
+    vertices = 4 * int(np.clip(np.ceil(2 * np.pi * np.sqrt(radius / 2.4) / 4), 3, 16))
+    angle = np.linspace(0, 2 * np.pi, vertices, endpoint=False)
+    unit = np.column_stack([np.cos(angle), np.sin(angle)]) * radius
+    rings = to_fixed(xy[:, None, :] + unit[None])
+    # A dashed ring: two edges drawn, two left out, all the way round.
+    dash_starts = np.arange(0, vertices, 4)
+    dash = (dash_starts[:, None] + np.arange(3)[None]) % vertices
+    for chosen, closed in ((~hollow, True), (hollow, False)):
+        if not chosen.any():
+            continue
+        shapes = rings[chosen] if closed else rings[chosen][:, dash].reshape(-1, 3, 2)
+        shape_groups = groups[chosen] if closed else np.repeat(groups[chosen], len(dash_starts))
+        # The dark halo needs no smooth edge (the coloured ring covers its middle), and drawing it
+        # without anti-aliasing halves the cost of the heads.
+        cv2.polylines(canvas, shapes, closed, _HALO, style.line + 2, cv2.LINE_8, SHIFT)
+        for group in np.unique(shape_groups):
+            cv2.polylines(canvas, shapes[shape_groups == group], closed, colours[group], style.line, cv2.LINE_AA, SHIFT)
+
+
+def ring_radius(style: Style) -> float:
+    """Radius of the ring drawn around a head, pixels of the drawn frame.
+
+    Example
+    -------
+    >>> round(ring_radius(Style.for_size((640, 480))), 1)
+    5.6
+    """
+    return style.radius * _RING
 
 
 def _draw_marker(canvas, xy, colour, kind: int, style: Style, size: float = 1.6) -> None:
@@ -385,11 +440,123 @@ def _draw_marker(canvas, xy, colour, kind: int, style: Style, size: float = 1.6)
     cv2.drawMarker(canvas, at, colour, kind, pixels, style.line, cv2.LINE_AA)
 
 
-def _draw_labels(canvas, texts: list[str], xy: np.ndarray, colours: list, style: Style) -> None:
-    """Each text up and to the right of its position."""
-    gap = style.radius + 2
-    origins = np.round(xy + [gap, -gap]).astype(int).tolist()
-    draw_texts(canvas, texts, list(map(tuple, origins)), colours, style.font, style.text)
+def _draw_labels(canvas, texts: list[str], xy: np.ndarray, colours: list, style: Style, taken: "Occupancy", margin: float = 0.0) -> None:
+    """Each text beside its position where it overlaps nothing taken; see :func:`place_labels`."""
+    chosen, origins = place_labels(taken, texts, xy, ring_radius(style) + 1, style.font, style.text, margin)
+    draw_texts(canvas, [texts[i] for i in chosen], origins, [colours[i] for i in chosen], style.font, style.text)
+
+
+class Occupancy:
+    """Which parts of a picture are taken by marks and labels, on a grid of 2-pixel cells.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        (height, width) of the picture, pixels.
+
+    Example
+    -------
+    >>> taken = Occupancy((100, 200))
+    >>> taken.take(10, 10, 20, 20)
+    >>> taken.free(15, 15, 30, 30), taken.free(40, 40, 50, 50)
+    (False, True)
+    """
+
+    CELL = 2
+
+    def __init__(self, shape: tuple[int, int]) -> None:
+        self.shape = shape
+        self.grid = np.zeros((shape[0] // self.CELL + 2, shape[1] // self.CELL + 2), bool)
+
+    def _cells(self, x0: float, y0: float, x1: float, y1: float) -> tuple[slice, slice]:
+        c = self.CELL
+        return slice(max(0, int(y0 // c)), max(0, int(y1 // c) + 1)), slice(max(0, int(x0 // c)), max(0, int(x1 // c) + 1))
+
+    def free(self, x0: float, y0: float, x1: float, y1: float, inside: bool = True) -> bool:
+        """Whether the box (pixels, inclusive) overlaps nothing taken (and, if ``inside``, lies
+        wholly inside the picture)."""
+        if inside and (x0 < 0 or y0 < 0 or x1 >= self.shape[1] or y1 >= self.shape[0]):
+            return False
+        return not self.grid[self._cells(x0, y0, x1, y1)].any()
+
+    def take(self, x0: float, y0: float, x1: float, y1: float) -> None:
+        """Mark the box (pixels, inclusive) as taken."""
+        self.grid[self._cells(x0, y0, x1, y1)] = True
+
+    def add_points(self, xy: np.ndarray, radius: float) -> None:
+        """Mark a square of half-side ``radius`` around each position as taken."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        xy = xy[np.isfinite(xy).all(axis=1)]
+        low = np.maximum(np.floor((xy - radius) / self.CELL).astype(int), 0).tolist()
+        high = (np.floor((xy + radius) / self.CELL).astype(int) + 1).tolist()
+        for (x0, y0), (x1, y1) in zip(low, high):
+            self.grid[y0:y1, x0:x1] = True
+
+
+def place_labels(taken: Occupancy, texts: list[str], xy: np.ndarray, gap: float, font: float, thickness: int, margin: float = 0.0) -> tuple[list[int], list[tuple[int, int]]]:
+    """Where each label goes: the first free place of four around its position, or nowhere.
+
+    On dense footage labels would cover each other and the objects; a label that finds no free
+    place (above right, below right, above left, below left of its position) is left out, so
+    that the ones drawn can be read. Labels earlier in ``texts`` are placed first.
+
+    Parameters
+    ----------
+    taken : Occupancy
+        What the labels must not cover; the placed labels are added to it.
+    texts : list of str
+    xy : ndarray, shape (N, 2)
+        Position each label belongs to, pixels.
+    gap : float
+        Distance kept from the position, pixels.
+    font, thickness
+        As for :func:`draw_texts`.
+    margin : float
+        Room kept free around each placed label, pixels: more thins the labels further.
+
+    Returns
+    -------
+    chosen : list of int
+        Index of each placed label.
+    origins : list of tuple of int
+        Its text origin (left end of the baseline), pixels.
+
+    Example
+    -------
+    >>> taken = Occupancy((100, 200))
+    >>> place_labels(taken, ["7", "7"], np.array([[50.0, 50.0], [50.0, 50.0]]), 4, 0.5, 1)[0]
+    [0, 1]
+    """
+    xy = np.asarray(xy, float).reshape(-1, 2)
+    if not len(texts):
+        return [], []
+    pictures = {text: _halo(text, font, thickness) for text in set(texts)}
+    width = np.array([pictures[text][0].shape[1] for text in texts], float)[:, None]
+    height = np.array([pictures[text][0].shape[0] for text in texts], float)[:, None]
+    x, y = xy[:, :1], xy[:, 1:]
+    # The four candidate boxes of every label at once (top-left corners), then one loop that
+    # only checks and marks the grid: labels are placed in turn, each after those before it.
+    box_x = np.round(np.hstack([x + gap, x + gap, x - gap - width, x - gap - width]))
+    box_y = np.round(np.hstack([y - gap - height, y + gap, y - gap - height, y + gap]))
+    last_x, last_y = box_x + width - 1, box_y + height - 1
+    rows, columns = taken.shape
+    fits = np.isfinite(x) & (box_x >= 0) & (box_y >= 0) & (last_x < columns) & (last_y < rows)
+    cell = taken.CELL
+    spans = [np.floor(values / cell).astype(int) for values in (box_y, last_y, box_x, last_x)]
+    wide = [np.floor(values / cell).astype(int) for values in (box_y - margin, last_y + margin, box_x - margin, last_x + margin)]
+    spans, wide = [a.tolist() for a in spans], [np.maximum(a, 0).tolist() for a in wide]
+    fits, box_x, box_y = fits.tolist(), box_x.tolist(), box_y.tolist()
+    grid = taken.grid
+    chosen, origins = [], []
+    for index, text in enumerate(texts):
+        for k in range(4):
+            if fits[index][k] and not grid[spans[0][index][k] : spans[1][index][k] + 1, spans[2][index][k] : spans[3][index][k] + 1].any():
+                grid[wide[0][index][k] : wide[1][index][k] + 1, wide[2][index][k] : wide[3][index][k] + 1] = True
+                _, left, top = pictures[text]
+                chosen.append(index)
+                origins.append((int(box_x[index][k]) + left, int(box_y[index][k]) + top))
+                break
+    return chosen, origins
 
 
 def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int) -> None:
@@ -397,41 +564,89 @@ def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, fo
     draw_texts(canvas, [text], [origin], [colour], font, thickness)
 
 
+def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
+    """(width, height) in pixels of ``text`` as :func:`draw_texts` writes it, halo included.
+
+    Example
+    -------
+    >>> width, height = text_size("1524", 0.5)
+    >>> width > height > 10
+    True
+    """
+    picture, _, _ = _halo(text, font, thickness)
+    return picture.shape[1], picture.shape[0]
+
+
 def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int) -> None:
-    """Write each text on ``canvas`` (BGR uint8) with its baseline starting at its origin
-    (pixels), on a black halo."""
+    """Write each text on ``canvas`` (BGR uint8) with its baseline starting at its origin (pixels),
+    on a black halo.
+
+    The glyphs are a TrueType sans-serif (Pillow's own font), whose digits cannot be taken for
+    one another or for strokes: OpenCV's Hershey 7 reads as a slash.
+
+    Parameters
+    ----------
+    font : float
+        Size as an OpenCV font scale: 1 is a 30-pixel font.
+    thickness : int
+        The dark halo around the glyphs is at least ``thickness // 2 + 1`` pixels wide (and a
+        tenth of the font size).
+    """
     height, width = canvas.shape[:2]
-    for text, (x, y) in zip(texts, origins):
-        halo, left, top = _halo(text, font, thickness)
+    placed = []
+    for text, (x, y), colour in zip(texts, origins, colours):
+        picture, left, top = _halo(text, font, thickness)
         x0, y0 = x - left, y - top
-        x1, y1 = x0 + halo.shape[1], y0 + halo.shape[0]
+        x1, y1 = x0 + picture.shape[1], y0 + picture.shape[0]
         cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
-        if cx0 >= cx1 or cy0 >= cy1:
-            continue
-        box = canvas[cy0:cy1, cx0:cx1]
-        cut = halo[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0]
-        # The darker of the two, so that the halos of labels that overlap do not darken each other.
-        cv2.min(box, cut, dst=box)
-    for text, origin, colour in zip(texts, origins, colours):
-        cv2.putText(canvas, text, origin, _FONT, font, colour, thickness, cv2.LINE_AA)
+        if cx0 < cx1 and cy0 < cy1:
+            placed.append((text, (slice(cy0, cy1), slice(cx0, cx1)), (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0)), colour))
+    # Halos first, the darker of two where they overlap, so that no halo covers another label's glyphs.
+    for text, box, clip, _ in placed:
+        picture = _halo(text, font, thickness)[0]
+        cv2.min(canvas[box], picture[clip][..., :3], dst=canvas[box])
+    for text, box, clip, colour in placed:
+        keep, ink = _glyphs(text, font, thickness, tuple(int(c) for c in colour))
+        target = canvas[box]
+        cv2.multiply(target, keep[clip], dst=target, scale=1 / 255)
+        cv2.add(target, ink[clip], dst=target)
+
+
+@functools.lru_cache(maxsize=4096)
+def _glyphs(text: str, font: float, thickness: int, colour: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """What a pixel under the glyphs keeps of itself (0-255, three channels) and the colour the
+    glyphs add (premultiplied by their coverage): writing is then one multiply and one add."""
+    coverage = _halo(text, font, thickness)[0][..., 3:4].astype(np.uint16)
+    keep = np.repeat((255 - coverage).astype(np.uint8), 3, axis=2)
+    ink = ((coverage * np.array(colour, np.uint16) + 127) // 255).astype(np.uint8)
+    return keep, ink
+
+
+@functools.lru_cache(maxsize=16)
+def _truetype(pixels: int) -> ImageFont.FreeTypeFont:
+    return ImageFont.load_default(size=pixels)
 
 
 @functools.lru_cache(maxsize=4096)
 def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
-    """The most each pixel around ``text`` may keep of its brightness (255 - halo, three equal
-    channels), and the text origin's position in that picture (left, top). Ids recur every
-    frame, hence the cache."""
-    # The text's own pixels grown by a few pixels. A thicker stroke will not do: OpenCV's fonts
-    # space and weigh glyphs by thickness, so a thick copy does not surround thin text.
-    reach = thickness // 2 + 1
-    pad = reach + thickness + 2
-    (text_width, text_height), baseline = cv2.getTextSize(text, _FONT, font, thickness)
-    written = np.zeros((text_height + baseline + 2 * pad, text_width + 2 * pad), np.uint8)
-    cv2.putText(written, text, (pad, pad + text_height), _FONT, font, 255, thickness, cv2.LINE_AA)
+    """``text`` drawn once: channels 0-2 the most each pixel may keep of its brightness (255 - the
+    halo), channel 3 the glyphs' coverage (0-255); and the text origin's position in that picture
+    (left, top). Ids recur every frame, hence the cache."""
+    pixels = max(6, round(_PIXELS_PER_FONT_SCALE * font))
+    face = _truetype(pixels)
+    # The halo grows with the font, so that large text stands out as well as small.
+    reach = max(thickness // 2 + 1, round(pixels / 10))
+    pad = reach + 1
+    left, top, right, bottom = face.getbbox(text, anchor="ls")
+    size = (right - left + 2 * pad, bottom - top + 2 * pad)
+    written = Image.new("L", size, 0)
+    ImageDraw.Draw(written).text((pad - left, pad - top), text, fill=255, font=face, anchor="ls")
+    glyphs = np.asarray(written)
     grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * reach + 1, 2 * reach + 1))
-    halo = cv2.cvtColor(255 - cv2.dilate(written, grow), cv2.COLOR_GRAY2BGR)
-    halo.flags.writeable = False
-    return halo, pad, pad + text_height
+    keep = 255 - cv2.dilate(glyphs, grow)
+    picture = np.dstack([keep, keep, keep, glyphs])
+    picture.flags.writeable = False
+    return picture, pad - left, pad - top
 
 
 class FalseDetections:
@@ -478,15 +693,15 @@ class FalseDetections:
             _draw_marker(canvas, xy, _NEUTRAL, cv2.MARKER_TILTED_CROSS, style, size=0.8)
 
 
-# A legend entry: symbol ("dot", "ring", "start", "end", "cross" or "line"), BGR colour, text.
+# A legend entry: symbol ("ring", "dashed", "start", "end", "cross" or "line"), BGR colour, text.
 LegendEntry = tuple[str, tuple[int, int, int], str]
 
 
 def track_legend(false_detections: bool) -> list[LegendEntry]:
     """Legend of :meth:`TrackLayer.draw`: what each mark means."""
     entries = [
-        ("dot", _NEUTRAL, "measured"),
-        ("ring", _NEUTRAL, "interpolated"),
+        ("ring", _NEUTRAL, "measured"),
+        ("dashed", _NEUTRAL, "interpolated"),
         ("start", _NEUTRAL, "track start"),
         ("end", _NEUTRAL, "track end"),
     ]
@@ -498,11 +713,11 @@ def draw_legend(canvas: np.ndarray, entries: Sequence[LegendEntry], style: Style
     if not entries:
         return
     font = style.font * 0.9
-    (_, text_height), _ = cv2.getTextSize("Ag", _FONT, font, style.text)
-    row = int(text_height * 2)
+    text_height = text_size("Ag", font, style.text)[1]
+    row = int(text_height * 1.4)
     pad = row // 2
     symbol = row
-    text_width = max(cv2.getTextSize(text, _FONT, font, style.text)[0][0] for _, _, text in entries)
+    text_width = max(text_size(text, font, style.text)[0] for _, _, text in entries)
     width = pad * 3 + symbol + text_width
     height = pad * 2 + row * len(entries)
     x0 = max(0, canvas.shape[1] - width - pad)
@@ -513,13 +728,13 @@ def draw_legend(canvas: np.ndarray, entries: Sequence[LegendEntry], style: Style
         x = x0 + pad + symbol // 2
         if kind == "line":
             cv2.line(canvas, (x - symbol // 2, y), (x + symbol // 2, y), colour, max(2, style.line), cv2.LINE_AA)
-        elif kind in ("dot", "ring"):
-            radius = int(round(min(style.radius, symbol / 3) * (1 << SHIFT)))
-            cv2.circle(canvas, (x << SHIFT, y << SHIFT), radius, colour, -1 if kind == "dot" else style.line, cv2.LINE_AA, SHIFT)
+        elif kind in ("ring", "dashed"):
+            symbol_style = Style(style.line, min(style.radius, symbol / 3 / _RING), style.font, style.text, style.marker)
+            draw_heads(canvas, np.array([[x, y]], float), np.zeros(1, int), [colour], np.array([kind == "dashed"]), symbol_style)
         else:
             kinds = {"start": cv2.MARKER_TRIANGLE_UP, "end": cv2.MARKER_SQUARE, "cross": cv2.MARKER_TILTED_CROSS}
             cv2.drawMarker(canvas, (x, y), colour, kinds[kind], int(symbol * 0.6), style.line, cv2.LINE_AA)
-        cv2.putText(canvas, text, (x0 + pad * 2 + symbol, y + text_height // 2), _FONT, font, _NEUTRAL, style.text, cv2.LINE_AA)
+        draw_text(canvas, text, (x0 + pad * 2 + symbol, y + text_height // 3), _NEUTRAL, font, style.text)
 
 
 def annotate(
@@ -557,8 +772,8 @@ def annotate(
 
 
 def _draw_title(canvas: np.ndarray, text: str, style: Style) -> None:
-    (_, text_height), _ = cv2.getTextSize("0", _FONT, style.font, style.text)
-    draw_text(canvas, text, (text_height, 2 * text_height), _NEUTRAL, style.font, style.text)
+    text_height = text_size("0", style.font, style.text)[1]
+    draw_text(canvas, text, (text_height // 2, text_height), _NEUTRAL, style.font, style.text)
 
 
 def annotate_frames(frames: Iterable[tuple[int, np.ndarray]], view: View, layers: Sequence[TrackLayer], **options) -> Iterator[tuple[int, np.ndarray]]:

@@ -1,33 +1,37 @@
 """The run pipeline: frames -> detections -> tracks -> files and an overlay clip.
 
-Frames are streamed twice (once to detect, once to draw) rather than held in memory, so the
+The layer between files and the library that every command and the Python API
+(:mod:`seedtrack.api`) call: :func:`detect_clip` reads a clip for
+:class:`seedtrack.detection.clip.ClipDetector`, :func:`group_points` and :func:`track_frames`
+give points to :func:`seedtrack.tracking.linking.link_goa` (or another tracker) as ``seedtrack
+track`` does. Frames are streamed twice (once to detect, once to draw) rather than held in memory, so the
 clip's length does not bound what can be processed.
 """
 
 from __future__ import annotations
 
-import math
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from seedtrack.data.atomic import output_folder
-from seedtrack.data.csvio import write_table
+from seedtrack.data.csvio import TRACK_COLUMNS, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.data.video import write_video
 from seedtrack.detection.background import temporal_median
-from seedtrack.detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
-from seedtrack.detection.roi import Circle, circle_mask, dish_mask
-from seedtrack.detection.choice import DetectorChoice, choose_detector
-from seedtrack.detection.spots import detect_spots
-from seedtrack.tracking.goa import GOAConfig, goa_updown, pass_steps
-from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
-from seedtrack.tracking.regime import choose_motion, fit_motion, track_without_drift
+from seedtrack.detection.blobs import BlobOptions, to_gray
+from seedtrack.detection.choice import DetectorChoice
+from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames
+from seedtrack.detection.roi import Circle
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short
+from seedtrack.tracking.linking import GOA_FAMILY, link_goa, pass_steps
+from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
@@ -35,9 +39,12 @@ from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_l
 from .progress import progress_bar
 from .wording import counted
 
-DETECTORS = ("auto", "blob", "spot")
-# Frames whose per-pixel median is a static scene's background: spread over the clip.
-_BACKGROUND_FRAMES = 64
+__all__ = [
+    "DETECTORS", "Detections", "DetectionSettings", "ClipDetections", "Points", "TrackingSettings",
+    "detect_clip", "group_points", "point_rows", "track_frames", "render_overlay", "run_pipeline",
+]
+
+POINT_COLUMNS = ("frame", "x", "y")
 
 
 @dataclass(frozen=True)
@@ -53,7 +60,7 @@ class DetectionSettings:
         (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame
         (:func:`seedtrack.detection.choice.choose_detector`).
     diameter : int or None
-        Spot diameter, pixels, odd; None estimates it from the first frame.
+        Spot diameter, pixels, odd; None measures it on the first frame.
     roi : "auto", "none", Circle or Path
         Region of interest: the dish found on the first frame (whole frame if there is none
         clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
@@ -68,36 +75,6 @@ class DetectionSettings:
     start: int = 0
     end: int | None = None
     step: int = 1
-
-
-@dataclass(frozen=True)
-class Detections:
-    """Measurements of every processed frame.
-
-    Attributes
-    ----------
-    frame_indices : ndarray of int, shape (n_frames,)
-        0-based index in the clip of each processed frame.
-    columns : list of dict of str to ndarray
-        Per processed frame, the detector's columns (``x``, ``y``, ``area``, ...).
-    """
-
-    frame_indices: np.ndarray
-    columns: list[dict[str, np.ndarray]]
-
-    @property
-    def points(self) -> list[np.ndarray]:
-        """Per frame, an (M_k, 2) array of (x, y) positions, pixels."""
-        return [np.column_stack((c["x"], c["y"])) for c in self.columns]
-
-    def to_rows(self) -> dict[str, np.ndarray]:
-        """Columns of ``detections.csv``: frame, x, y, area, then the detector's other columns."""
-        names = list(dict.fromkeys(("x", "y", "area", *MEASUREMENT_COLUMNS)))
-        counts = [len(c["x"]) for c in self.columns]
-        rows = {"frame": np.repeat(self.frame_indices, counts).astype(np.int64)}
-        for name in names:
-            rows[name] = np.concatenate([c[name] for c in self.columns]) if self.columns else np.empty(0)
-        return rows
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,12 +105,13 @@ class ClipDetections:
 
 
 def detect_clip(
-    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, say: Callable[[str], None] = print
+    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, say: Callable[[str], None] | None = print
 ) -> ClipDetections:
-    """Detect objects in every frame of a clip, with a progress bar.
+    """Detect objects in every frame of a clip, with a progress bar
+    (:class:`seedtrack.detection.clip.ClipDetector` on the frames read).
 
-    The detector is chosen on the first frame (see :class:`DetectionSettings`) and the choice
-    said on one ``detector: ...`` line.
+    The detector, chosen on the first frame, is said on one ``detector: ...`` line (``say``
+    None: nothing is said).
 
     A video that breaks off part way keeps the frames decoded before, and one line on standard
     error says where it stopped.
@@ -161,54 +139,41 @@ def detect_clip(
             step = f" every {settings.step}" if settings.step > 1 else ""
             span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
-        roi, circle = _given_roi(settings.roi, source.size)
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        options = settings.options
-        choice = None
-        indices: list[int] = []
-        columns: list[dict[str, np.ndarray]] = []
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter)
         preview = None
         with progress_bar(source.frame_count, "detecting") as bar:
-            for index, image in source:
-                gray = to_gray(image)
-                if not indices:
-                    if settings.roi == "auto":
-                        roi, circle = dish_mask(gray)
-                    if options.polarity == "auto":
-                        # Once per clip: a frame with little in it must not flip it.
-                        options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
-                    scene = gray if background is None else gray.astype(np.float32) - background
-                    choice = choose_detector(scene, options.polarity, detector=settings.detector, diameter=settings.diameter, roi=roi)
-                    say(f"detector: {choice.reason}")
-                indices.append(index)
-                if choice.spots is not None:
-                    columns.append(detect_spots(gray, choice.spots, roi=roi, background=background))
-                else:
-                    columns.append(detect_blobs(gray, options, background=background, roi=roi))
-                if index == preview_frame:
-                    preview = image.copy()
-                bar.update(1)
-        if not indices:
+
+            def frames():
+                nonlocal preview
+                for index, image in source:
+                    if index == preview_frame:
+                        preview = image.copy()
+                    yield index, image
+                    bar.update(1)
+
+            detections = detect_frames(frames(), detector)
+        if not detections.columns:
             raise DataError(path, source.stopped_early or "no frame could be read")
+        if say is not None:
+            say(f"detector: {detector.choice.reason}")
         if source.stopped_early:
-            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(indices), 'frame')} before it", file=sys.stderr)
-        return ClipDetections(Detections(np.array(indices), columns), source.fps, roi, circle, preview, choice)
+            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(detections.columns), 'frame')} before it", file=sys.stderr)
+        return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
 
 
-def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> tuple[np.ndarray | None, Circle | None]:
-    """The region of interest known before any frame is read ("auto" waits for the first)."""
-    if isinstance(roi, Circle):
-        return circle_mask(size, roi), roi
-    if isinstance(roi, Path):
-        return read_mask(roi, size), None
-    return None, None
+def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> str | Circle | np.ndarray:
+    """The region of interest as :class:`seedtrack.detection.clip.ClipDetector` takes it: a mask
+    file read, anything else as it is."""
+    return read_mask(roi, size) if isinstance(roi, Path) else roi
 
 
 def _temporal_background(path: Path, settings: DetectionSettings, source: FrameSource) -> np.ndarray:
-    """Per-pixel median of up to 64 frames spread evenly over the processed range."""
-    spread = settings.step * max(1, math.ceil((source.frame_count or _BACKGROUND_FRAMES) / _BACKGROUND_FRAMES))
+    """Per-pixel median of up to 64 frames spread evenly over the processed range (as
+    :func:`seedtrack.detection.clip.temporal_background` takes them from frames in memory)."""
+    spread = settings.step * background_spacing(source.frame_count)
     with open_frames(path, start=settings.start, end=settings.end, step=spread) as sample:
-        total = min(sample.frame_count, _BACKGROUND_FRAMES) if sample.frame_count is not None else None
+        total = min(sample.frame_count, BACKGROUND_FRAMES) if sample.frame_count is not None else None
         with progress_bar(total, "background") as bar:
 
             def grey_frames():
@@ -216,41 +181,170 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
                     bar.update(1)
                     yield to_gray(image)
 
-            return temporal_median(grey_frames(), _BACKGROUND_FRAMES)
+            return temporal_median(grey_frames(), BACKGROUND_FRAMES)
 
 
-def track_with_motion(
-    frames: list[np.ndarray],
-    config: GOAConfig,
-    motion: str,
-    track: Callable[[list[np.ndarray], GOAConfig], Tracks],
-    keep_model: bool = False,
-    say: Callable[[str], None] = print,
-) -> Tracks:
-    """``track(frames, fitted)`` with ``config`` fitted to the motion of the points.
+@dataclass(frozen=True)
+class Points:
+    """Measured points grouped by frame.
 
-    The motion is measured by :func:`seedtrack.tracking.regime.choose_motion` (``motion`` is "auto",
-    "smooth" or "random") and the choice said on one ``motion: ...`` line. Random motion with a
-    common drift is tracked in a frame moving with the drift and returned in the image frame
-    (:func:`seedtrack.tracking.regime.track_without_drift`). ``keep_model`` keeps ``config``'s individual
-    model (the user chose it).
+    Attributes
+    ----------
+    frames : list of ndarray, each (M_k, 2)
+        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    frame_step : int
+        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
+        of N apart (every Nth frame measured, as ``run --step N`` writes them).
+    order : ndarray of int
+        0-based row of the input table of each point, frame after frame.
+    offset : ndarray of int
+        Position in ``order`` of each frame's first point.
+    kept : dict of str to ndarray
+        The input's other columns (as text when read from a file), one entry per row.
     """
-    choice = choose_motion(frames, motion)
-    fitted, drift = fit_motion(config, choice, keep_model)
-    limit = "no speed limit" if fitted.d_max is None else f"speed limit {fitted.d_max:.2f} px/frame"
-    if any(drift):
-        limit += f" about the drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame"
-    say(f"motion: {choice.reason}; tracking with {fitted.individual.name.upper()}, {limit}")
-    return track_without_drift(frames, drift, lambda moved: track(moved, fitted))
+
+    frames: list[np.ndarray]
+    first_frame: int
+    frame_step: int
+    order: np.ndarray
+    offset: np.ndarray
+    kept: dict[str, np.ndarray]
 
 
-def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: LifecycleConfig | None, first_frame: int = 0) -> Tracks:
-    """GOA-updown with a progress bar: open (tracks start and end anywhere) or, with ``lifecycle``
-    None, the paper's fixed count of tracks. ``first_frame`` is the 0-based index of ``frames[0]``."""
-    with progress_bar(pass_steps(len(frames)), "tracking", unit="step") as bar:
-        if lifecycle is None:
-            return goa_updown(frames, config, first_frame, progress=bar.update)
-        return goa_updown_open(frames, config, lifecycle, first_frame, progress=bar.update)
+def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | None = None) -> Points:
+    """Group the points of a table (columns frame, x, y, any others) by frame, sorted by
+    position within each, as ``seedtrack track`` and ``run`` both track them.
+
+    Parameters
+    ----------
+    table : dict of str to ndarray
+        ``frame`` (int), ``x``, ``y`` (finite floats), other columns kept as they are.
+    source
+        What the table was read from, to name in errors.
+    processed : ndarray of int, optional
+        The 0-based frames measured, evenly spaced, when known (a clip detected frame by frame,
+        some frames perhaps empty); by default the frame numbers present.
+
+    Raises
+    ------
+    DataError
+        Without ``processed``: if a frame is negative, or fewer than two frames hold points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([2, 0, 0, 4]), "x": np.array([5.0, 9.0, 1.0, 3.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> points.first_frame, points.frame_step, [f[:, 0].tolist() for f in points.frames]
+    (0, 2, [[1.0, 9.0], [5.0], [3.0]])
+    >>> points.order.tolist()
+    [2, 1, 0, 3]
+    """
+    frame, x, y = (table[name] for name in POINT_COLUMNS)
+    if processed is None:
+        if frame.size == 0:
+            raise DataError(source, "no points (only a header); tracking needs points in at least two frames")
+        if frame.min() < 0:
+            bad = int(np.argmax(frame < 0))
+            raise DataError(source, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
+        processed = np.unique(frame)
+        if processed.size < 2:
+            raise DataError(source, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
+    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
+    # other frame missed (which no track would survive).
+    step = int(np.gcd.reduce(np.diff(processed))) if processed.size > 1 else 1
+    # Sorting by position makes the result independent of the order of the rows.
+    order = np.lexsort((y, x, frame))
+    first = int(processed[0])
+    columns = (int(processed[-1]) - first) // step + 1
+    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step, minlength=columns))))
+    xy = np.column_stack((x, y))[order]
+    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
+    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
+    return Points(frames, first, step, order, offset[:-1], kept)
+
+
+def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The track columns of tracks.csv, in the input's frame numbers, and for each row the 0-based
+    row of the input table it measures (-1 where interpolated), so that nothing is joined on floats.
+
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([1, 0, 1, 0]), "x": np.array([11.0, 0.0, 1.0, 10.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> rows, source = point_rows(points, track_frames(points.frames, TrackingSettings(algorithm="nn"), say=None))
+    >>> rows["track_id"].tolist(), source.tolist()
+    ([0, 0, 1, 1], [1, 2, 3, 0])
+    """
+    rows = tracks.to_rows()
+    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
+    column = rows["frame"] - tracks.first_frame
+    rows["frame"] = tracks.first_frame + column * points.frame_step
+    measured = measurement >= 0
+    source = np.full(measurement.size, -1, dtype=np.int64)
+    source[measured] = points.order[points.offset[column[measured]] + measurement[measured]]
+    return rows, source
+
+
+@dataclass(frozen=True)
+class TrackingSettings:
+    """What the tracker is asked to do: the options of ``seedtrack track`` (and of ``run``).
+
+    Attributes
+    ----------
+    algorithm : str
+        A GOA tracker (:data:`seedtrack.tracking.linking.GOA_FAMILY`), fitted to the motion, or
+        a comparison tracker of :data:`seedtrack.tracking.trackers.TRACKERS`, which takes only
+        ``config.d_max``.
+    config : GOAConfig
+        Before fitting to the motion.
+    lifecycle : LifecycleConfig or None
+        When tracks open and end; None for the paper's fixed count of tracks.
+    motion : {"auto", "smooth", "random"}
+    keep_model : bool
+        Keep ``config``'s individual model whatever the motion (the user chose it).
+    min_length : int
+        Tracks spanning fewer frames, gaps included, are dropped.
+    """
+
+    algorithm: str = "goa-updown"
+    config: GOAConfig = GOAConfig()
+    lifecycle: LifecycleConfig | None = LifecycleConfig()
+    motion: str = "auto"
+    keep_model: bool = False
+    min_length: int = 0
+
+
+def track_frames(
+    frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] | None = print
+) -> Tracks:
+    """Track points as ``settings`` say, with a progress bar, and drop the short tracks.
+
+    The GOA family says on one ``motion: ...`` line how the points move
+    (:attr:`seedtrack.tracking.linking.MotionFit.summary`) to ``say`` (None: to nobody).
+    ``first_frame`` is the 0-based index of ``frames[0]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> frames = [np.array([[10.0 + 2 * k, 10.0], [40.0 - 2 * k, 30.0]]) for k in range(6)]
+    >>> track_frames(frames, TrackingSettings(min_length=3)).n_tracks  # doctest: +ELLIPSIS
+    motion: smooth-motion default: only 8 unambiguous 3-frame chains (need 30) ...
+    2
+    """
+    if settings.algorithm not in GOA_FAMILY:
+        return drop_short(run_tracker(settings.algorithm, frames, settings.config.d_max, first_frame), settings.min_length)
+    with progress_bar(pass_steps(settings.algorithm, len(frames)), "tracking", unit="step") as bar:
+        tracks, fit = link_goa(
+            frames, settings.algorithm, settings.config, settings.lifecycle, settings.motion, settings.keep_model, first_frame, progress=bar.update
+        )
+    if say is not None:
+        say(fit.summary)
+    return drop_short(tracks, settings.min_length)
 
 
 def render_overlay(
@@ -272,29 +366,22 @@ def render_overlay(
             write_video(out, (image for _, image in frames), fps, progress=bar)
 
 
-def run_pipeline(
-    clip: Path,
-    out: Path,
-    settings: DetectionSettings,
-    config: GOAConfig,
-    lifecycle: LifecycleConfig | None = LifecycleConfig(),
-    min_length: int = 0,
-    motion: str = "auto",
-) -> tuple[Detections, Tracks]:
+def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings()) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Tracking is :func:`link_frames` with ``lifecycle`` and ``config`` fitted to ``motion`` (see
-    :func:`track_with_motion`); tracks spanning fewer than ``min_length`` frames are not written.
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
     """
     with output_folder(out):
-        found = detect_clip(clip, settings)
+        found = detect_clip(clip, detection)
         detections = found.detections
-        write_table(out / "detections.csv", detections.to_rows())
-        tracks = track_with_motion(detections.points, config, motion, lambda frames, fitted: link_frames(frames, fitted, lifecycle))
-        tracks = drop_short(tracks, min_length)
+        rows = detections.to_rows()
+        write_table(out / "detections.csv", rows)
+        # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
+        # columns of the tracks are the processed frames, as the overlay and the writer take them.
+        tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
         write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
+        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=detection)
     return detections, tracks

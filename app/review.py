@@ -7,8 +7,10 @@ import numpy as np
 
 from seedtrack.tracking.tracks import Tracks
 
-from .drawing import SHIFT, draw_text, to_fixed, track_colour
+from .drawing import SHIFT, Occupancy, Style, draw_heads, draw_text, draw_texts, place_labels, ring_radius, to_fixed, track_colour
 
+# Marks and ids at a fixed size, pixels of the page: the page is enlarged to suit them.
+_STYLE = Style(line=2, radius=4.0, font=0.6, text=2, marker=9)
 # Pages are enlarged until they are at least this wide, so ids of small clips stay readable.
 _MIN_PAGE_WIDTH = 1280
 _MAX_ZOOM = 4
@@ -22,8 +24,9 @@ def review_zoom(width: int) -> int:
 def draw_review_page(frame: np.ndarray, tracks: Tracks, column: int, frame_index: int, trail: int = 3) -> np.ndarray:
     """One review page: the frame enlarged, each track's last steps, its position and its id.
 
-    Ids are drawn in the track's colour on a black halo so that they read on any background;
-    an interpolated (unmeasured) position is a hollow circle.
+    Ids are drawn in the track's colour on a black halo so that they read on any background, each
+    where it covers no other id or head (ids that find no such place are left out); a position is
+    a ring (dashed if interpolated), so that the object inside stays visible.
 
     Parameters
     ----------
@@ -51,15 +54,16 @@ def draw_review_page(frame: np.ndarray, tracks: Tracks, column: int, frame_index
         history = history[~np.isnan(history[:, 0])]
         if len(history) > 1:
             cv2.polylines(page, [to_fixed(history)], False, track_colour(tracks.track_ids[row]), 2, cv2.LINE_AA, SHIFT)
-    for row in present:
-        colour = track_colour(tracks.track_ids[row])
-        x, y = tracks.xy[row, column] * zoom + offset
-        hollow = tracks.interpolated[row, column]
-        cv2.circle(page, tuple(to_fixed(np.array([x, y]))), 4 << SHIFT, (0, 0, 0), 4, cv2.LINE_AA, SHIFT)
-        cv2.circle(page, tuple(to_fixed(np.array([x, y]))), 4 << SHIFT, colour, 2 if hollow else -1, cv2.LINE_AA, SHIFT)
-        origin = (int(round(x + 7)), int(round(y - 7)))
-        text = str(tracks.track_ids[row])
-        draw_text(page, text, origin, colour, 0.7, 2)
+    heads = tracks.xy[present, column] * zoom + offset
+    ids = tracks.track_ids[present]
+    colours = [track_colour(track_id) for track_id in ids]
+    draw_heads(page, heads, np.arange(len(present)), colours, tracks.interpolated[present, column], _STYLE)
+    # Every id that fits without covering another id or a head; the rest are left out rather
+    # than written over each other (the annotate page shows every id, zoomed in).
+    taken = Occupancy(page.shape[:2])
+    taken.add_points(heads, ring_radius(_STYLE))
+    chosen, origins = place_labels(taken, [str(i) for i in ids], heads, ring_radius(_STYLE) + 1, _STYLE.font, _STYLE.text)
+    draw_texts(page, [str(ids[i]) for i in chosen], origins, [colours[i] for i in chosen], _STYLE.font, _STYLE.text)
     label = f"frame {frame_index}"
     draw_text(page, label, (12, 36), (255, 255, 255), 1.0, 2)
     return page

@@ -77,7 +77,7 @@ def test_bad_input_is_one_line_exit_2_and_no_outputs(tmp_path, make_input, messa
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("link_frames", ["detections.csv"])])
+@pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("track_frames", ["detections.csv"])])
 def test_ctrl_c_keeps_finished_files_and_leaves_no_empty_folder(small_clip, tmp_path, capsys, monkeypatch, stage, kept):
     import seedtrack.pipeline
 

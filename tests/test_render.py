@@ -10,7 +10,7 @@ from PIL import Image
 
 from seedtrack.cli import main
 from seedtrack.commands.compare import disagreeing_links
-from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, TrackLayer, View, annotate, draw_text, track_colour
+from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Style, TrackLayer, View, annotate, draw_text, ring_radius, track_colour
 from seedtrack.data.csvio import write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
@@ -68,12 +68,15 @@ def test_mp4_is_h264_yuv420p_with_frames_size_and_track_colours(clip, tmp_path, 
     truth = read_tracks(clip / "truth.csv")
     for position, frame in enumerate(range(1, FRAMES, 2)):
         row = loneliest(truth, frame)
-        # A pixel centre x maps to 2x + 0.5 on the doubled frame.
-        x, y = np.round(truth.xy[row, frame] * 2 + 0.5).astype(int)
-        patch = images[position][y - 1 : y + 2, x - 1 : x + 2].reshape(-1, 3)
-        pixel = np.median(patch, axis=0)
-        assert closest_palette_colour(pixel) == track_colour(truth.track_ids[row])
-        assert np.abs(pixel - track_colour(truth.track_ids[row])).max() < 40
+        # A pixel centre x maps to 2x + 0.5 on the doubled frame; the head is a ring around it.
+        x, y = truth.xy[row, frame] * 2 + 0.5
+        radius = ring_radius(Style.for_size((2 * WIDTH, 2 * HEIGHT)))
+        rows, columns = np.mgrid[: 2 * HEIGHT, : 2 * WIDTH]
+        ring = images[position][np.abs(np.hypot(columns - x, rows - y) - radius) < 0.6].astype(int)
+        colour = track_colour(truth.track_ids[row])
+        near = np.abs(ring - colour).max(axis=1) < 40
+        assert near.mean() > 0.5, "most of the ring is in the track's colour"
+        assert all(closest_palette_colour(pixel) == colour for pixel in ring[near])
 
 
 def test_png_is_byte_identical_on_two_runs_and_matches_the_folder_frame(clip, tmp_path, capsys):
@@ -182,8 +185,9 @@ def test_frames_are_drawn_alike_at_any_size():
         blank = np.zeros((480, 640, 3), np.uint8)
         drawn = annotate(blank, 1, view, [TrackLayer(tracks, view)])
         coverage.append(np.count_nonzero(drawn.any(axis=2)) / drawn.shape[0] / drawn.shape[1])
-    # Marks, labels and legend grow with the frame: they cover a similar share of it.
-    assert 0.5 < coverage[1] / coverage[0] < 2
+    # Marks, labels and legend grow with the frame: they cover a similar share of it (a little
+    # more at 640x480, where ring lines and glyph strokes are rounded up to whole pixels).
+    assert 0.4 < coverage[1] / coverage[0] < 2
 
 
 @pytest.mark.parametrize(

@@ -1,7 +1,9 @@
 """Every tracker by name, behind one call: frames and a speed limit in, tracks out.
 
 ``seedtrack track --algorithm NAME`` and the experiments pick trackers from here, so each one
-is given the same measurements and the same speed limit (d_max, v_max) in the same units.
+is given the same measurements and the same speed limit (d_max, v_max) in the same units. The GOA
+family is fitted to the motion of the points first (:func:`seedtrack.tracking.linking.link_goa`),
+as the command does, so that a tracker called here gives the command's answer.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import numpy as np
 
 from .goa import GOAConfig, goa_updown
 from .ipan import IPANConfig, ipan
-from .lifecycle import LifecycleConfig, goa_updown_open
+from .linking import link_goa
 from .nn import nearest_neighbour
 from .rs import rangarajan_shah
 from .ss import sethi_jain
@@ -64,13 +66,15 @@ TRACKERS: dict[str, Tracker] = {
         Tracker(
             "goa-updown",
             "GOA-updown with track initiation and termination: tracks open from leftover points measured in three "
-            "frames in a row, end after 10 missed frames, and are joined across gaps of up to 10 frames",
-            lambda frames, max_speed, first: goa_updown_open(frames, GOAConfig(d_max=max_speed), LifecycleConfig(), first),
+            "frames in a row, end after 10 missed frames, and are joined across gaps of up to 10 frames; the motion "
+            "model fitted to the points (smooth: IM2; random: IM1 about the drift)",
+            lambda frames, max_speed, first: link_goa(frames, "goa-updown", GOAConfig(d_max=max_speed), first_frame=first)[0],
         ),
         Tracker(
             "goa-updown-fixed",
-            "GOA-updown as published (Veenman et al. 2001): one track per point of the first frame, IM2, slaves",
-            lambda frames, max_speed, first: goa_updown(frames, GOAConfig(d_max=max_speed), first),
+            "GOA-updown as published (Veenman et al. 2001): one track per point of the first frame, slaves; "
+            "the motion model fitted to the points",
+            lambda frames, max_speed, first: link_goa(frames, "goa-updown-fixed", GOAConfig(d_max=max_speed), first_frame=first)[0],
         ),
         Tracker(
             "nn",
@@ -108,7 +112,8 @@ def run_tracker(name: str, frames: Sequence[np.ndarray], max_speed: float | None
     frames : sequence of ndarray, each (M_k, 2)
         Measurement positions per frame (x, y), pixels.
     max_speed : float or None
-        Largest speed, pixels/frame; None lets each tracker use its default.
+        Largest speed, pixels/frame (for the GOA family about the drift of random motion);
+        None lets each tracker use its default.
     first_frame : int
         0-based frame index of ``frames[0]``.
 

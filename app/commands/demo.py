@@ -8,11 +8,11 @@ from pathlib import Path
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.trackfile import read_tracks
-from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.evaluation import evaluate_tracks
 
 from ..errors import UsageError
 from ..pipeline import DetectionSettings, run_pipeline
-from .run import add_tracker_options, lifecycle_config, tracker_config
+from .run import add_tracker_options, tracking_settings
 
 
 def add_parser(subparsers) -> None:
@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    config, lifecycle = tracker_config(args), lifecycle_config(args)
+    tracking = tracking_settings(args)
     try:
         spec = DishSpec(
             seeds=args.seeds,
@@ -52,9 +52,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     with output_folder(args.out):
         scene = write_dish_clip(spec, args.out)
-        run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length, args.motion)
+        run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), tracking)
     result = read_tracks(args.out / "tracks.csv")
-    scores = score_tracks(result, scene.truth, args.tol)
+    scores, _ = evaluate_tracks(result, scene.truth, args.tol)
     print(
         f"{scores.correct_tracks} of {scores.true_tracks} seeds tracked correctly over all {spec.frames} frames "
         f"(track error {scores.track_error:.3f}, link error {scores.link_error:.3f}); "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -15,9 +16,9 @@ from seedtrack.data.atomic import atomic_path, output_folder
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.trackfile import FORMATS, read_tracks
-from seedtrack.tracking.clear_mot import clear_mot
+from seedtrack.tracking.clear_mot import ClearMotScores
 from seedtrack.tracking.diagnosis import first_errors
-from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.evaluation import Scores, evaluate_tracks
 from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import draw_error_plot, write_png
@@ -55,7 +56,21 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
     Returns
     -------
     measures : dict
-        Name to value, in report order (rates in [0, 1], MOTP in pixels).
+        The file names, then :func:`assess`'s scores by name, in report order.
+    clear, wrong, hint
+        As :func:`assess` returns them.
+    """
+    scores, clear, wrong, hint = assess(read_tracks(tracks_path, tracks_format), read_tracks(truth_path, truth_format), tolerance, truth_path)
+    return {"tracks": str(tracks_path), "truth": str(truth_path), **dataclasses.asdict(scores)}, clear, wrong, hint
+
+
+def assess(result: Tracks, truth: Tracks, tolerance: float, truth_source) -> tuple[Scores, ClearMotScores, dict[str, np.ndarray], str | None]:
+    """Score a result against the truth read from ``truth_source`` (named in errors and hints).
+
+    Returns
+    -------
+    scores : Scores
+        Rates in [0, 1], MOTP in pixels.
     clear : ClearMotScores
         With the per-frame counts.
     wrong : dict of str to ndarray
@@ -63,44 +78,21 @@ def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_forma
     hint : str or None
         When most true points match nothing but would with the truth's frame numbers one off,
         a line that says so (truth numbered from 1 against tracks from 0 is a common slip).
+
+    Raises
+    ------
+    DataError
+        If the truth holds no track or a single frame.
     """
-    result = read_tracks(tracks_path, tracks_format)
-    truth = read_tracks(truth_path, truth_format)
     if truth.n_tracks == 0:
-        raise DataError(truth_path, "holds no true tracks; there is nothing to score against")
+        raise DataError(truth_source, "holds no true tracks; there is nothing to score against")
     if truth.n_frames < 2:
-        raise DataError(truth_path, f"holds a single frame ({truth.first_frame}); scoring links needs at least two")
-    paper = score_tracks(result, truth, tolerance)
-    clear = clear_mot(result, truth, tolerance)
-    measures = {
-        "tracks": str(tracks_path),
-        "truth": str(truth_path),
-        "tolerance_px": tolerance,
-        "true_tracks": paper.true_tracks,
-        "result_tracks": result.n_tracks,
-        "correct_tracks": paper.correct_tracks,
-        "track_error": paper.track_error,
-        "relaxed_correct": paper.relaxed_correct,
-        "relaxed_merit": 1.0 - paper.relaxed_error,
-        "true_links": paper.true_links,
-        "correct_links": paper.correct_links,
-        "link_error": paper.link_error,
-        "true_points": clear.num_objects,
-        "result_points": clear.num_predictions,
-        "misses": clear.num_misses,
-        "false_positives": clear.num_false_positives,
-        "id_switches": clear.num_switches,
-        "fragmentations": clear.num_fragmentations,
-        "mota": clear.mota,
-        "motp_px": clear.motp,
-        "idf1": clear.idf1,
-        "idp": clear.idp,
-        "idr": clear.idr,
-    }
-    return measures, clear, first_errors(result, truth, tolerance), _offset_hint(result, truth, tolerance, clear, truth_path)
+        raise DataError(truth_source, f"holds a single frame ({truth.first_frame}); scoring links needs at least two")
+    scores, clear = evaluate_tracks(result, truth, tolerance)
+    return scores, clear, first_errors(result, truth, tolerance), _offset_hint(result, truth, tolerance, clear, truth_source)
 
 
-def _offset_hint(result: Tracks, truth: Tracks, tolerance: float, clear, truth_path: Path) -> str | None:
+def _offset_hint(result: Tracks, truth: Tracks, tolerance: float, clear: ClearMotScores, truth_path) -> str | None:
     if clear.num_objects - clear.num_misses >= _WELL_MATCHED * clear.num_objects:
         return None
     # Points with a result point near them, not one-to-one matches: as good a sign at a
@@ -142,9 +134,19 @@ def format_table(measures: dict) -> str:
     return "\n".join(lines)
 
 
+def check_tolerance(tol: float) -> None:
+    """Refuse a matching distance that is not a positive finite number of pixels.
+
+    Raises
+    ------
+    UsageError
+    """
+    if not (tol > 0 and math.isfinite(tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {tol:g}")
+
+
 def run(args: argparse.Namespace) -> int:
-    if not (args.tol > 0 and math.isfinite(args.tol)):
-        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
+    check_tolerance(args.tol)
     measures, clear, wrong, hint = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
     print(format_table(measures))
     if hint is not None:

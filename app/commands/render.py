@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_table
 from seedtrack.data.errors import DataError
@@ -125,10 +127,24 @@ def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tupl
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
-    if args.summary is not None and args.summary.suffix.lower() != ".png":
-        raise UsageError(f"--summary must be a .png file, got {args.summary}")
     tracks = read_tracks(args.tracks, args.format)
     detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
+    print(draw(args, kind, tracks, detections))
+    return 0
+
+
+def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections: dict[str, np.ndarray] | None) -> str:
+    """Draw ``tracks`` over ``args.input`` into ``args.out`` (``kind``, see
+    :func:`check_view_options`) and ``args.summary``, as the options say; ``args.tracks`` names
+    the tracks in errors. Detections (columns frame, x, y) that no track holds are crossed out.
+
+    Returns
+    -------
+    str
+        What was written, in one line.
+    """
+    if args.summary is not None and Path(args.summary).suffix.lower() != ".png":
+        raise UsageError(f"--summary must be a .png file, got {args.summary}")
     with open_range(args, kind, [(args.tracks, tracks)]) as source:
         view = View.of(source.size, args.crop, args.scale)
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
@@ -136,13 +152,10 @@ def run(args: argparse.Namespace) -> int:
             _, first = next(iter(open_frames(args.input, start=args.start, end=args.start + 1)))
             write_png(args.summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
         if kind is None:
-            print(f"wrote {args.summary}")
-            return 0
+            return f"wrote {args.summary}"
         false = None
         if detections is not None:
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
         frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(false is not None))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
-    print(f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else ""))
-    return 0
-
+    return f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else "")

@@ -11,7 +11,7 @@ from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.regime import MOTIONS
 
 from ..errors import UsageError, option_name
-from ..pipeline import run_pipeline
+from ..pipeline import TrackingSettings, run_pipeline
 from ..wording import counted
 from .detect import add_detection_options, detection_settings
 
@@ -116,6 +116,25 @@ def lifecycle_config(args: argparse.Namespace) -> LifecycleConfig | None:
     return LifecycleConfig() if args.max_gap is None else LifecycleConfig(max_gap=args.max_gap)
 
 
+def tracking_settings(args: argparse.Namespace, config: GOAConfig | None = None) -> TrackingSettings:
+    """The tracking the options ask for; ``config`` (default :func:`tracker_config`) is the GOA
+    configuration before it is fitted to the motion.
+
+    Raises
+    ------
+    UsageError
+        If the options make no sense.
+    """
+    lifecycle = lifecycle_config(args)
+    algorithm = getattr(args, "algorithm", "goa-updown")
+    if algorithm == "goa-updown-fixed":
+        lifecycle = None
+    keep_model = getattr(args, "individual_model", None) is not None
+    return TrackingSettings(
+        algorithm, config if config is not None else tracker_config(args), lifecycle, args.motion or "auto", keep_model, args.min_length
+    )
+
+
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run",
@@ -132,9 +151,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    settings = detection_settings(args)
-    config, lifecycle = tracker_config(args), lifecycle_config(args)
-    detections, tracks = run_pipeline(args.input, args.out, settings, config, lifecycle, args.min_length, args.motion)
+    detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args))
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
         f"{counted(len(detections.columns), 'frame')}, {counted(measured, 'detection')}, {counted(tracks.n_tracks, 'track')}; "

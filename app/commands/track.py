@@ -3,27 +3,23 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import TRACK_COLUMNS, read_table, write_table
-from seedtrack.data.errors import DataError
-from seedtrack.tracking.goa import GOAConfig, goa, initial_links
-from seedtrack.tracking.lifecycle import drop_short
+from seedtrack.data.csvio import read_table, write_table
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.linking import GOA_FAMILY
 from seedtrack.tracking.motion import CombinedModel, IndividualModel
-from seedtrack.tracking.trackers import TRACKERS, run_tracker
+from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
-from ..pipeline import link_frames, track_with_motion
-from ..progress import progress_bar
+from ..pipeline import POINT_COLUMNS, Points, group_points, point_rows, track_frames
 from ..wording import counted
-from .run import add_tracker_options, check_limits, lifecycle_config
+from .run import add_tracker_options, check_limits, lifecycle_config, tracking_settings
 
-POINT_COLUMNS = ("frame", "x", "y")
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
 FIRST_LINKS = {
     "lookahead": {},
@@ -31,7 +27,6 @@ FIRST_LINKS = {
     "paper": {"initialisation": "im1", "restart_lost": False},
 }
 # Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
-_GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
 _GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links", "motion")
 # Options of the open GOA-updown (the default) alone.
 _OPEN_ONLY = ("max_gap", "fixed_count")
@@ -125,64 +120,9 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run, phi_max=None, motion=None)
 
 
-@dataclass(frozen=True)
-class Points:
-    """Measured points grouped by frame.
-
-    Attributes
-    ----------
-    frames : list of ndarray, each (M_k, 2)
-        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
-    first_frame : int
-        0-based frame index of ``frames[0]``.
-    frame_step : int
-        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
-        of N apart (every Nth frame measured, as ``run --step N`` writes them).
-    order : ndarray of int
-        0-based data row of POINTS.csv of each point, frame after frame.
-    offset : ndarray of int
-        Position in ``order`` of each frame's first point.
-    kept : dict of str to ndarray
-        The input's other columns, as text, one entry per data row.
-    """
-
-    frames: list[np.ndarray]
-    first_frame: int
-    frame_step: int
-    order: np.ndarray
-    offset: np.ndarray
-    kept: dict[str, np.ndarray]
-
-
 def read_points(path: Path) -> Points:
-    """Read POINTS.csv and group its points by frame.
-
-    Raises
-    ------
-    DataError
-        If a column is missing or not numeric, a frame is negative, or fewer than two frames hold points.
-    """
-    table = read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True)
-    frame, x, y = (table[name] for name in POINT_COLUMNS)
-    if frame.size == 0:
-        raise DataError(path, "no points (only a header); tracking needs points in at least two frames")
-    if frame.min() < 0:
-        bad = int(np.argmax(frame < 0))
-        raise DataError(path, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
-    present = np.unique(frame)
-    if present.size < 2:
-        raise DataError(path, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
-    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
-    # other frame missed (which no track would survive).
-    step = int(np.gcd.reduce(np.diff(present)))
-    # Sorting by position makes the result independent of the order of the rows.
-    order = np.lexsort((y, x, frame))
-    first = int(present[0])
-    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step))))
-    xy = np.column_stack((x, y))[order]
-    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
-    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
-    return Points(frames, first, step, order, offset[:-1], kept)
+    """Read POINTS.csv and group its points by frame (see :func:`group_points`)."""
+    return group_points(read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True), path)
 
 
 def goa_config(args: argparse.Namespace) -> GOAConfig:
@@ -203,11 +143,17 @@ def goa_config(args: argparse.Namespace) -> GOAConfig:
         raise UsageError(str(error)) from None
 
 
-def _check_options(args: argparse.Namespace) -> None:
+def check_options(args: argparse.Namespace) -> None:
+    """Refuse options out of range or given to a tracker that does not read them.
+
+    Raises
+    ------
+    UsageError
+    """
     check_limits(args, non_negative=("min_speed",))
     if args.min_speed is not None and args.max_speed is not None and args.min_speed >= args.max_speed:
         raise UsageError(f"--min-speed ({args.min_speed:g}) must be below --max-speed ({args.max_speed:g})")
-    if args.algorithm not in _GOA_FAMILY:
+    if args.algorithm not in GOA_FAMILY:
         given = [option_name(name) for name in _GOA_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
@@ -218,46 +164,24 @@ def _check_options(args: argparse.Namespace) -> None:
     lifecycle_config(args)
 
 
-def track_points(points: Points, args: argparse.Namespace) -> Tracks:
-    """Run the tracker the options name on the points (progress bar for GOA), then drop the
-    tracks shorter than --min-length."""
-    frames, first = points.frames, points.first_frame
-    if args.algorithm not in _GOA_FAMILY:
-        return drop_short(run_tracker(args.algorithm, frames, args.max_speed, first), args.min_length)
-    if args.algorithm == "goa":
-
-        def track(moved: list[np.ndarray], config: GOAConfig) -> Tracks:
-            with progress_bar(len(moved) - 2, "tracking", unit="step") as bar:
-                return goa(moved, initial_links(moved, config), config, first, progress=bar.update)
-
-    else:
-        lifecycle = None if args.algorithm == "goa-updown-fixed" else lifecycle_config(args)
-
-        def track(moved: list[np.ndarray], config: GOAConfig) -> Tracks:
-            return link_frames(moved, config, lifecycle, first)
-
-    keep_model = args.individual_model is not None
-    tracks = track_with_motion(frames, goa_config(args), args.motion or "auto", track, keep_model)
-    return drop_short(tracks, args.min_length)
+def track_points(points: Points, args: argparse.Namespace, say=print) -> Tracks:
+    """Run the tracker the options name on the points (see :func:`seedtrack.pipeline.track_frames`)."""
+    return track_frames(points.frames, tracking_settings(args, goa_config(args)), points.first_frame, say)
 
 
 def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
     """The columns of tracks.csv: the track columns, then the kept columns (blank when interpolated)."""
-    rows = tracks.to_rows()
-    measurement = tracks.measurement[tracks.present]  # same row order as to_rows
-    column = rows["frame"] - tracks.first_frame
-    rows["frame"] = tracks.first_frame + column * points.frame_step
-    measured = measurement >= 0
-    source = points.order[points.offset[column[measured]] + measurement[measured]]
+    rows, source = point_rows(points, tracks)
+    measured = source >= 0
     for name, values in points.kept.items():
-        out = np.full(measurement.size, "", dtype=object)
-        out[measured] = values[source]
+        out = np.full(source.size, "", dtype=object)
+        out[measured] = values[source[measured]]
         rows[name] = out
     return rows
 
 
 def run(args: argparse.Namespace) -> int:
-    _check_options(args)
+    check_options(args)
     check_target(args.out)  # now rather than after a long tracking run
     points = read_points(args.points)
     tracks = track_points(points, args)

@@ -16,7 +16,8 @@ from dataclasses import replace
 from seedtrack.experiments import BASE, ci95
 from seedtrack.data.psmg import generate_psmg
 from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.lifecycle import LifecycleConfig
+from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.trackers import run_tracker
 
@@ -27,7 +28,7 @@ SCENES = (
 )
 TRACKERS = {
     "goa-updown (open, default)": lambda frames, limit: run_tracker("goa-updown", frames, limit),
-    "goa-updown --max-gap 4": lambda frames, limit: goa_updown_open(frames, GOAConfig(d_max=limit), LifecycleConfig(max_gap=4)),
+    "goa-updown --max-gap 4": lambda frames, limit: link_goa(frames, "goa-updown", GOAConfig(d_max=limit), LifecycleConfig(max_gap=4))[0],
     "ipan": lambda frames, limit: run_tracker("ipan", frames, limit),
     "goa-updown-fixed (the paper's)": lambda frames, limit: run_tracker("goa-updown-fixed", frames, limit),
 }

@@ -17,10 +17,9 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from seedtrack.pipeline import track_with_motion
 from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 
 SEEDS = 80
@@ -38,9 +37,7 @@ def seeds_kept(spec: DishSpec, **config) -> int:
     """Seeds that one track follows over every frame they are seen, with ``GOAConfig(**config)``."""
     scene = make_dish_scene(spec)
     frames = scene.visible_points()
-    tracks = track_with_motion(
-        frames, GOAConfig(**config), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
-    )
+    tracks = link_goa(frames, "goa-updown", GOAConfig(**config))[0]
     return score_tracks(tracks, scene.truth, tolerance=0.5).correct_tracks
 
 

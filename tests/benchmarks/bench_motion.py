@@ -19,13 +19,12 @@ from typing import Callable
 import numpy as np
 
 from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
-from seedtrack.pipeline import track_with_motion
 from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.walkers import WalkerSpec, generate_walkers
 from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.tracks import Tracks
 
@@ -75,9 +74,7 @@ SCENES: dict[str, Callable[[int], Scene]] = {
 
 def seedtrack_default(frames: list[np.ndarray], _limit: float) -> Tracks:
     """What ``seedtrack track`` does with no options (the motion line of every run unsaid)."""
-    return track_with_motion(
-        frames, GOAConfig(), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
-    )
+    return link_goa(frames, "goa-updown", GOAConfig())[0]
 
 
 TRACKERS: dict[str, Callable[[list[np.ndarray], float], Tracks]] = {

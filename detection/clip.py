@@ -1,0 +1,190 @@
+"""Detection over a whole clip: frames in, one table of measurements per frame out.
+
+Some decisions hold for a clip, not a frame: whether objects are darker or lighter than the
+background, the region of interest (the dish), and which detector suits the footage (blobs for
+seeds, spots for beads; :func:`seedtrack.detection.choice.choose_detector`) with the spot size
+and least mass. They are made once, on the first frame, so that a frame with little in it cannot
+flip them; :class:`ClipDetector` holds them. Nothing here
+reads files: :func:`seedtrack.pipeline.detect_clip` is the layer that reads a clip and calls this.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from .background import temporal_median
+from .blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
+from .choice import DETECTOR_NAMES, DetectorChoice, choose_detector
+from .roi import Circle, circle_mask, dish_mask
+from .spots import detect_spots
+
+DETECTORS = DETECTOR_NAMES
+# Frames whose per-pixel median is a static scene's background: spread over the clip.
+BACKGROUND_FRAMES = 64
+
+
+def background_spacing(frame_count: int | None) -> int:
+    """Every how many processed frames one is taken for the temporal background, so that up to
+    :data:`BACKGROUND_FRAMES` of them spread over the clip (``frame_count`` None: unknown)."""
+    return max(1, math.ceil((frame_count or BACKGROUND_FRAMES) / BACKGROUND_FRAMES))
+
+
+def temporal_background(frames: Sequence[np.ndarray]) -> np.ndarray:
+    """The per-pixel median of up to 64 of ``frames`` spread evenly over them.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray of uint8, each (H, W) or (H, W, 3) BGR
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W)
+    """
+    return temporal_median((to_gray(f) for f in frames[:: background_spacing(len(frames))]), BACKGROUND_FRAMES)
+
+
+class ClipDetector:
+    """Detect objects frame after frame, deciding polarity and region on the first frame.
+
+    Parameters
+    ----------
+    options : BlobOptions
+        Polarity "auto" is decided on the first frame (:func:`seedtrack.detection.blobs.choose_polarity`).
+    detector : {"auto", "blob", "spot"}
+        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`), Crocker-Grier spots
+        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame.
+    diameter : int, optional
+        Spot diameter, pixels, odd; measured on the first frame when not given.
+    roi : "auto", "none", Circle or ndarray of uint8 (H, W)
+        "auto": the dish found on the first frame, or the whole frame if there is none clearly;
+        "none": the whole frame; a circle in pixels; a mask, nonzero inside.
+    background : ndarray of uint8, shape (H, W), optional
+        The background image when ``options.background`` is "temporal".
+
+    Attributes
+    ----------
+    options : BlobOptions
+        After the first frame, with the polarity decided.
+    roi : ndarray of uint8 or None
+        The region used (255 inside), None for the whole frame; known after the first frame.
+    circle : Circle or None
+        The dish found or the circle given.
+    choice : DetectorChoice or None
+        The detector that runs, its settings and why; known after the first frame.
+
+    Examples
+    --------
+    A dark disc of radius 3 pixels on a light frame:
+
+    >>> import numpy as np
+    >>> frame = np.full((60, 80), 200, np.uint8)
+    >>> yy, xx = np.mgrid[:60, :80]
+    >>> frame[(xx - 30) ** 2 + (yy - 20) ** 2 <= 9] = 40
+    >>> detector = ClipDetector(roi="none")
+    >>> found = detector.detect(frame)
+    >>> print(detector.options.polarity, round(float(found["x"][0]), 1), round(float(found["y"][0]), 1))
+    dark 30.0 20.0
+    """
+
+    def __init__(
+        self,
+        options: BlobOptions = BlobOptions(),
+        detector: str = "auto",
+        roi: str | Circle | np.ndarray = "auto",
+        background: np.ndarray | None = None,
+        diameter: int | None = None,
+    ) -> None:
+        if detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+        if isinstance(roi, str) and roi not in ("auto", "none"):
+            raise ValueError(f"roi must be 'auto', 'none', a Circle or a mask, got {roi!r}")
+        self.options = options
+        self.circle = roi if isinstance(roi, Circle) else None
+        self.roi = roi if isinstance(roi, np.ndarray) else None
+        self._pending_roi = roi
+        self._detector, self._diameter = detector, diameter
+        self.choice: DetectorChoice | None = None
+        self._background = background
+        self._first = True
+
+    def detect(self, image: np.ndarray) -> dict[str, np.ndarray]:
+        """The measurements of one frame (see :func:`seedtrack.detection.blobs.detect_blobs` and
+        :func:`seedtrack.detection.spots.detect_spots`).
+
+        Parameters
+        ----------
+        image : ndarray, shape (H, W) or (H, W, 3) BGR
+        """
+        gray = to_gray(image)
+        if self._first:
+            self._decide(gray)
+            self._first = False
+        if self.choice.spots is not None:
+            return detect_spots(gray, self.choice.spots, roi=self.roi, background=self._background)
+        return detect_blobs(gray, self.options, background=self._background, roi=self.roi)
+
+    def _decide(self, gray: np.ndarray) -> None:
+        if isinstance(self._pending_roi, Circle):
+            self.roi = circle_mask((gray.shape[1], gray.shape[0]), self._pending_roi)
+        elif isinstance(self._pending_roi, str) and self._pending_roi == "auto":
+            self.roi, self.circle = dish_mask(gray)
+        if self.roi is not None and self.roi.shape != gray.shape:
+            raise ValueError(f"the region of interest is {self.roi.shape[1]}x{self.roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
+        if self.options.polarity == "auto":
+            self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
+        scene = gray if self._background is None else gray.astype(np.float32) - self._background
+        self.choice = choose_detector(scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi)
+
+
+@dataclass(frozen=True)
+class Detections:
+    """Measurements of every processed frame.
+
+    Attributes
+    ----------
+    frame_indices : ndarray of int, shape (n_frames,)
+        0-based index in the clip of each processed frame.
+    columns : list of dict of str to ndarray
+        Per processed frame, the detector's columns (``x``, ``y``, ``area``, ...).
+    """
+
+    frame_indices: np.ndarray
+    columns: list[dict[str, np.ndarray]]
+
+    @property
+    def points(self) -> list[np.ndarray]:
+        """Per frame, an (M_k, 2) array of (x, y) positions, pixels."""
+        return [np.column_stack((c["x"], c["y"])) for c in self.columns]
+
+    def to_rows(self) -> dict[str, np.ndarray]:
+        """Columns of ``detections.csv``: frame, x, y, area, then the detector's other columns."""
+        names = list(dict.fromkeys(("x", "y", "area", *MEASUREMENT_COLUMNS)))
+        counts = [len(c["x"]) for c in self.columns]
+        rows = {"frame": np.repeat(self.frame_indices, counts).astype(np.int64)}
+        for name in names:
+            rows[name] = np.concatenate([c[name] for c in self.columns]) if self.columns else np.empty(0)
+        return rows
+
+
+def detect_frames(frames: Iterable[tuple[int, np.ndarray]], detector: ClipDetector) -> Detections:
+    """Run ``detector`` on ``(frame index, image)`` pairs, in order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> blank = np.full((40, 40), 128, np.uint8)
+    >>> detect_frames(enumerate([blank, blank]), ClipDetector(roi="none")).frame_indices.tolist()
+    [0, 1]
+    """
+    indices, columns = [], []
+    for index, image in frames:
+        indices.append(index)
+        columns.append(detector.detect(image))
+    return Detections(np.array(indices, dtype=np.int64), columns)
+
+
+__all__ = ["DETECTORS", "BACKGROUND_FRAMES", "ClipDetector", "Detections", "background_spacing", "detect_frames", "temporal_background"]

@@ -1,0 +1,160 @@
+"""GOA tracking fitted to the motion of the points: the one path that the command, the Python
+API, :func:`seedtrack.tracking.trackers.run_tracker` and the experiments all take.
+
+The decision is made from the measurements alone (:func:`seedtrack.tracking.regime.choose_motion`):
+smooth motion keeps the smooth-motion model IM2 with no speed limit; random motion is tracked by
+nearest neighbour within a speed limit about the common drift, in a frame moving with that drift.
+GOA given the same points with and without this step can differ completely: on random walkers
+IM2 follows chance alignments from one neighbour to the next.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Sequence
+
+import numpy as np
+
+from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
+from .goa import pass_steps as _updown_steps
+from .lifecycle import LifecycleConfig, goa_updown_open
+from .regime import MotionChoice, choose_motion, fit_motion, track_without_drift
+from .tracks import Tracks, point_frames
+
+GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
+
+
+@dataclass(frozen=True)
+class MotionFit:
+    """How the points move and the tracker configuration fitted to it.
+
+    Attributes
+    ----------
+    choice : MotionChoice
+        What :func:`seedtrack.tracking.regime.choose_motion` measured.
+    config : GOAConfig
+        The configuration asked for, fitted to the motion (see
+        :func:`seedtrack.tracking.regime.fit_motion`).
+    drift : tuple of float
+        Common step (x, y), pixels/frame, removed before tracking; (0, 0) for none.
+    """
+
+    choice: MotionChoice
+    config: GOAConfig
+    drift: tuple[float, float]
+
+    @property
+    def summary(self) -> str:
+        """One line for the user: what was measured and how it is tracked."""
+        limit = "no speed limit" if self.config.d_max is None else f"speed limit {self.config.d_max:.2f} px/frame"
+        if any(self.drift):
+            limit += f" about the drift ({self.drift[0]:.2f}, {self.drift[1]:.2f}) px/frame"
+        return f"motion: {self.choice.reason}; tracking with {self.config.individual.name.upper()}, {limit}"
+
+
+def fit_to_motion(frames: Sequence[np.ndarray], config: GOAConfig = GOAConfig(), motion: str = "auto", keep_model: bool = False) -> MotionFit:
+    """Measure how the points move and fit ``config`` to it.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Positions (x, y) per frame, pixels, consecutive frames.
+    config : GOAConfig
+        What the user set; a speed limit given bounds the steps about the drift.
+    motion : {"auto", "smooth", "random"}
+        "auto" measures; the others say what the motion is.
+    keep_model : bool
+        Keep ``config``'s individual model (the user chose it) whatever the motion.
+
+    Examples
+    --------
+    >>> from seedtrack.data.walkers import WalkerSpec, generate_walkers
+    >>> frames, _ = generate_walkers(WalkerSpec(walkers=200, frames=10, random_seed=1))
+    >>> fit_to_motion(frames).config.individual.name
+    'im1'
+    """
+    choice = choose_motion(frames, motion)
+    fitted, drift = fit_motion(config, choice, keep_model)
+    return MotionFit(choice, fitted, drift)
+
+
+def link_goa(
+    frames: Sequence[np.ndarray],
+    algorithm: str = "goa-updown",
+    config: GOAConfig = GOAConfig(),
+    lifecycle: LifecycleConfig | None = LifecycleConfig(),
+    motion: str = "auto",
+    keep_model: bool = False,
+    first_frame: int = 0,
+    progress: Progress | None = None,
+) -> tuple[Tracks, MotionFit]:
+    """Track points with a GOA tracker fitted to their motion.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Positions (x, y) per frame, pixels, consecutive frames.
+    algorithm : {"goa-updown", "goa-updown-fixed", "goa"}
+        GOA-updown whose tracks open and end anywhere (``lifecycle`` None: the paper's fixed
+        count of tracks), GOA-updown as published, or GOA's single forward pass from the first
+        links ``config`` chooses.
+    config : GOAConfig
+        Before fitting to the motion (:func:`fit_to_motion`).
+    lifecycle : LifecycleConfig or None
+        When tracks open and end, for "goa-updown" only.
+    motion : {"auto", "smooth", "random"}
+    keep_model : bool
+        Keep ``config``'s individual model whatever the motion.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    progress : callable, optional
+        Called with 1 after each step; :func:`pass_steps` calls in all.
+
+    Returns
+    -------
+    tracks : Tracks
+        In the image frame (the drift put back); column k holds ``frames[k]``.
+    fit : MotionFit
+
+    Examples
+    --------
+    Two points moving right by 2 pixels a frame:
+
+    >>> import numpy as np
+    >>> frames = [np.array([[10.0 + 2 * k, 10.0], [10.0 + 2 * k, 40.0]]) for k in range(5)]
+    >>> tracks, fit = link_goa(frames)
+    >>> tracks.n_tracks
+    2
+    """
+    if algorithm not in GOA_FAMILY:
+        raise ValueError(f"algorithm must be one of {', '.join(GOA_FAMILY)}, got {algorithm!r}")
+    frames = point_frames(frames)
+    fit = fit_to_motion(frames, config, motion, keep_model)
+
+    def track(moved: list[np.ndarray]) -> Tracks:
+        if algorithm == "goa":
+            return goa(moved, initial_links(moved, fit.config), fit.config, first_frame, progress=progress)
+        if algorithm == "goa-updown-fixed" or lifecycle is None:
+            return goa_updown(moved, fit.config, first_frame, progress=progress)
+        return goa_updown_open(moved, fit.config, lifecycle, first_frame, progress=progress)
+
+    tracks = track_without_drift(frames, fit.drift, track)
+    return (_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
+
+
+def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
+    """``tracks`` with each measured position the measurement itself: moving into the drift's
+    frame and back changes the last bits, and a measured point must keep its position."""
+    held = np.nonzero(tracks.measurement >= 0)
+    offset = np.concatenate(([0], np.cumsum([f.shape[0] for f in frames])))
+    xy = tracks.xy.copy()
+    xy[held] = np.concatenate(frames)[offset[held[1]] + tracks.measurement[held]]
+    return replace(tracks, xy=xy)
+
+
+def pass_steps(algorithm: str, n_frames: int) -> int:
+    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames."""
+    return max(n_frames - 2, 0) if algorithm == "goa" else _updown_steps(n_frames)
+
+
+__all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]
