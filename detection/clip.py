@@ -16,11 +16,13 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from seedtrack.data.depth import to_uint8, value_range
+
 from .background import temporal_median
 from .blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
 from .choice import DETECTOR_NAMES, DetectorChoice, choose_detector
 from .roi import Circle, circle_mask, dish_mask
-from .spots import detect_spots
+from .spots import as_float_gray, detect_spots
 
 DETECTORS = DETECTOR_NAMES
 # Frames whose per-pixel median is a static scene's background: spread over the clip.
@@ -118,16 +120,24 @@ class ClipDetector:
         Parameters
         ----------
         image : ndarray, shape (H, W) or (H, W, 3) BGR
+            uint8, or deeper (uint16, float): mapped to 8 bits for blobs by the range of the
+            first frame's data, kept as it is for spots.
         """
-        gray = to_gray(image)
         if self._first:
-            self._decide(gray)
+            # Deeper data keep one map to 8 bits for the whole clip, from their range.
+            self._span = value_range(image)
+        gray = to_gray(image if image.dtype == np.uint8 else to_uint8(image, self._span))
+        # Spots are found on the data's own values, unless a temporal background (8-bit) is
+        # taken off first.
+        native = image if self._background is None else gray
+        if self._first:
+            self._decide(gray, native)
             self._first = False
         if self.choice.spots is not None:
-            return detect_spots(gray, self.choice.spots, roi=self.roi, background=self._background)
+            return detect_spots(native, self.choice.spots, roi=self.roi, background=self._background)
         return detect_blobs(gray, self.options, background=self._background, roi=self.roi)
 
-    def _decide(self, gray: np.ndarray) -> None:
+    def _decide(self, gray: np.ndarray, native: np.ndarray) -> None:
         if isinstance(self._pending_roi, Circle):
             self.roi = circle_mask((gray.shape[1], gray.shape[0]), self._pending_roi)
         elif isinstance(self._pending_roi, str) and self._pending_roi == "auto":
@@ -136,7 +146,7 @@ class ClipDetector:
             raise ValueError(f"the region of interest is {self.roi.shape[1]}x{self.roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
         if self.options.polarity == "auto":
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
-        scene = gray if self._background is None else gray.astype(np.float32) - self._background
+        scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background
         self.choice = choose_detector(scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi)
 
 

@@ -94,3 +94,15 @@ def test_the_choice_takes_spots_for_round_beads_and_blobs_for_seeds():
     choice = choose_detector(gray, "dark", roi=roi)
     assert choice.name == "blob" and "elongated" in choice.reason
     assert choose_detector(gray, "dark", detector="spot", roi=roi).name == "spot"
+
+
+def test_the_api_finds_spots_in_16_bit_and_float_frames_on_their_own_values():
+    import seedtrack
+
+    field = make_spot_field(SpotFieldSpec(width=128, height=128, spots=10, touching_pairs=0, rings=0, snr=8.0, random_seed=2))
+    photons = np.clip(field.image, 0, None) * 100
+    deep = seedtrack.detect([np.round(photons).astype(np.uint16)])
+    floating = seedtrack.detect([photons.astype(np.float32)])
+    rows, _ = match_frame(deep[["x", "y"]].to_numpy(), field.xy, 1.0)
+    assert len(deep) == len(floating) and len(rows) == 10
+    np.testing.assert_allclose(deep["x"], floating["x"], atol=1e-3)
