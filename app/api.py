@@ -92,7 +92,7 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
     with _python_names():
         settings = detect_command.detection_settings(args)
     if isinstance(source, (str, os.PathLike)):
-        detections = detect_clip(Path(source), settings).detections
+        detections = detect_clip(Path(source), settings, say=None).detections
     else:
         detections = _detect_arrays(source, settings)
     return pd.DataFrame(detections.to_rows())
@@ -296,6 +296,10 @@ def _roi_text(roi) -> str:
     return str(roi) if isinstance(roi, os.PathLike) else roi
 
 
+# Frame data the detectors take: 8 or 16 bits, or float (their range read from the first frame).
+_FRAME_TYPES = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32), np.dtype(np.float64))
+
+
 def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) -> Detections:
     """:func:`seedtrack.pipeline.detect_clip` on frames in memory."""
     selected = itertools.islice(enumerate(source), settings.start, settings.end, settings.step)
@@ -304,8 +308,10 @@ def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) ->
     def checked_frames() -> Iterator[tuple[int, np.ndarray]]:
         for index, image in selected:
             image = np.asarray(image)
-            if image.dtype != np.uint8 or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
-                raise ValueError(f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, got {image.dtype} of shape {image.shape}")
+            if image.dtype not in _FRAME_TYPES or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+                raise ValueError(
+                    f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, uint16 or float, got {image.dtype} of shape {image.shape}"
+                )
             if shape and image.shape[:2] != shape[0]:
                 raise ValueError(f"frame {index} is {image.shape[1]}x{image.shape[0]}, the first {shape[0][1]}x{shape[0][0]}")
             shape[:] = [image.shape[:2]]
@@ -323,7 +329,7 @@ def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) ->
     roi = settings.roi
     if isinstance(roi, Path):
         roi = read_mask(roi, (first[1].shape[1], first[1].shape[0]))
-    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background))
+    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter))
 
 
 def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer: tuple[str, ...]) -> dict[str, np.ndarray]:

@@ -25,6 +25,7 @@ from seedtrack.data.trackfile import write_tracks
 from seedtrack.data.video import write_video
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
+from seedtrack.detection.choice import DetectorChoice
 from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames
 from seedtrack.detection.roi import Circle
 from seedtrack.tracking.goa import GOAConfig
@@ -54,9 +55,12 @@ class DetectionSettings:
     ----------
     options : BlobOptions
         Polarity ("auto" is decided once, on the first frame), background, threshold, areas.
-    detector : {"blob", "log"}
-        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`) or Laplacian-of-Gaussian spots
-        (:func:`seedtrack.detection.spots.detect_spots`).
+    detector : {"auto", "blob", "spot"}
+        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`), Crocker-Grier spots
+        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame
+        (:func:`seedtrack.detection.choice.choose_detector`).
+    diameter : int or None
+        Spot diameter, pixels, odd; None measures it on the first frame.
     roi : "auto", "none", Circle or Path
         Region of interest: the dish found on the first frame (whole frame if there is none
         clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
@@ -65,7 +69,8 @@ class DetectionSettings:
     """
 
     options: BlobOptions = BlobOptions()
-    detector: str = "blob"
+    detector: str = "auto"
+    diameter: int | None = None
     roi: str | Circle | Path = "auto"
     start: int = 0
     end: int | None = None
@@ -87,6 +92,8 @@ class ClipDetections:
         The dish found or the circle given, when the region is a circle.
     preview : ndarray of uint8, shape (H, W, 3), or None
         The frame asked for as a preview, as read.
+    choice : DetectorChoice
+        The detector that ran, its settings and why.
     """
 
     detections: Detections
@@ -94,11 +101,17 @@ class ClipDetections:
     roi: np.ndarray | None
     circle: Circle | None
     preview: np.ndarray | None
+    choice: DetectorChoice
 
 
-def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None) -> ClipDetections:
+def detect_clip(
+    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, say: Callable[[str], None] | None = print
+) -> ClipDetections:
     """Detect objects in every frame of a clip, with a progress bar
     (:class:`seedtrack.detection.clip.ClipDetector` on the frames read).
+
+    The detector, chosen on the first frame, is said on one ``detector: ...`` line (``say``
+    None: nothing is said).
 
     A video that breaks off part way keeps the frames decoded before, and one line on standard
     error says where it stopped.
@@ -127,7 +140,7 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
             span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background)
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter)
         preview = None
         with progress_bar(source.frame_count, "detecting") as bar:
 
@@ -142,9 +155,11 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
             detections = detect_frames(frames(), detector)
         if not detections.columns:
             raise DataError(path, source.stopped_early or "no frame could be read")
+        if say is not None:
+            say(f"detector: {detector.choice.reason}")
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(detections.columns), 'frame')} before it", file=sys.stderr)
-        return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview)
+        return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
 
 
 def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> str | Circle | np.ndarray:

@@ -114,6 +114,10 @@ class DishSpec:
     dust_specks : int
         Dark specks 1.5 px across (a seed is 7 x 3.5) lying on the dish, turning with it, at
         least a seed length away from every seed; not in the truth.
+    separation : float or None
+        Least distance between seed centres, pixels; None for 2.5 seed lengths, so that seeds
+        never touch unless in a touching pair. A seed length or less makes a dense dish on
+        which many seeds touch.
     """
 
     seeds: int = 80
@@ -138,6 +142,7 @@ class DishSpec:
     rim: bool = False
     glare_spots: int = 0
     dust_specks: int = 0
+    separation: float | None = None
 
     def __post_init__(self) -> None:
         checks = [
@@ -171,6 +176,7 @@ class DishSpec:
             ),
             (_is_int(self.glare_spots) and self.glare_spots >= 0, "glare_spots must be a whole number >= 0"),
             (_is_int(self.dust_specks) and self.dust_specks >= 0, "dust_specks must be a whole number >= 0"),
+            (self.separation is None or 0 < self.separation < math.inf, "separation must be finite and > 0"),
         ]
         problems = [message for ok, message in checks if not ok]
         if problems:
@@ -283,9 +289,8 @@ def make_dish_scene(spec: DishSpec) -> DishScene:
     pairs = spec.touching_pairs
     # A seed with a partner needs room for the partner, a seed length further out at most.
     room = spec.seed_length if pairs else 0.0
-    start = _place_seeds(
-        rng, spec.seeds - pairs, _SEED_RADIUS_FRACTION * radius - room, _SEPARATION_IN_LENGTHS * spec.seed_length + room
-    )
+    separation = _SEPARATION_IN_LENGTHS * spec.seed_length if spec.separation is None else spec.separation
+    start = _place_seeds(rng, spec.seeds - pairs, _SEED_RADIUS_FRACTION * radius - room, separation + room)
     angle = _dish_angles(rng, spec.frames, spec.rim_speed / radius, spec.speed_jitter)
     heading = rng.uniform(0, np.pi, spec.seeds)
     seed_grey = rng.uniform(*_SEED_GREY_RANGE, spec.seeds)

@@ -3,8 +3,9 @@
 Every source yields ``(frame_index, image)`` one frame at a time: ``frame_index`` is the 0-based
 index in the original clip, ``image`` a uint8 (height, width, 3) BGR array (OpenCV layout).
 Images deeper than 8 bits (16-bit, float) are scaled to uint8 with one linear map per source,
-taken from the first frame's darkest and brightest value, so that intensities stay comparable
-across frames (later frames are clipped to that range).
+from the range of the data (see :func:`seedtrack.data.depth.value_range`: 0..4095 for 12-bit
+data in 16-bit words, 0..1 for float images within it), fixed by the first frame so that
+intensities stay comparable across frames; a frame's own brightness does not stretch it.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import av
 import cv2
 import numpy as np
 
+from .depth import to_uint8, value_range
 from .errors import DataError
 from .video import ffmpeg_reason, open_container, video_info
 
@@ -290,19 +292,9 @@ def _image_problem(image: np.ndarray | None, size: tuple[int, int], name: str) -
 
 
 def _scaler(first: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """A function mapping any frame of this source to uint8 BGR, fixed by the first frame."""
-    if first.dtype == np.uint8:
-        return _to_bgr
-    finite = first[np.isfinite(first)] if first.dtype.kind == "f" else first
-    low = float(finite.min()) if finite.size else 0.0
-    high = float(finite.max()) if finite.size else 1.0
-    scale = 255.0 / (high - low) if high > low else 1.0
-
-    def to_uint8(image: np.ndarray) -> np.ndarray:
-        scaled = (np.nan_to_num(image.astype(np.float32), nan=low) - low) * scale
-        return _to_bgr(np.clip(scaled + 0.5, 0, 255).astype(np.uint8))
-
-    return to_uint8
+    """A function mapping any frame of this source to uint8 BGR, fixed by the first frame's data range."""
+    span = value_range(first)
+    return lambda image: _to_bgr(to_uint8(image, span))
 
 
 def _to_bgr(image: np.ndarray) -> np.ndarray:

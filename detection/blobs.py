@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from seedtrack.data.depth import to_uint8, value_range
+
 from .background import contrast_histogram, flat_background, local_background, noise_floor, otsu_above
 from .split import split_touching
 
@@ -84,7 +86,16 @@ class BlobOptions:
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:
-    """A uint8 grey-level view of an (H, W) or (H, W, 3) BGR frame."""
+    """A uint8 grey-level view of an (H, W) or (H, W, 3) BGR frame of any depth (deeper data
+    mapped from its range, see :func:`seedtrack.data.depth.value_range`).
+
+    Example
+    -------
+    >>> int(to_gray(np.full((2, 2), 4095, np.uint16)).max())
+    255
+    """
+    if image.dtype != np.uint8:
+        image = to_uint8(image, value_range(image))
     if image.ndim == 3:
         return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     return image

@@ -1,8 +1,10 @@
 """Detection over a whole clip: frames in, one table of measurements per frame out.
 
 Some decisions hold for a clip, not a frame: whether objects are darker or lighter than the
-background, and the region of interest (the dish). They are made once, on the first frame, so
-that a frame with little in it cannot flip them; :class:`ClipDetector` holds them. Nothing here
+background, the region of interest (the dish), and which detector suits the footage (blobs for
+seeds, spots for beads; :func:`seedtrack.detection.choice.choose_detector`) with the spot size
+and least mass. They are made once, on the first frame, so that a frame with little in it cannot
+flip them; :class:`ClipDetector` holds them. Nothing here
 reads files: :func:`seedtrack.pipeline.detect_clip` is the layer that reads a clip and calls this.
 """
 
@@ -14,12 +16,15 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from seedtrack.data.depth import to_uint8, value_range
+
 from .background import temporal_median
 from .blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
+from .choice import DETECTOR_NAMES, DetectorChoice, choose_detector
 from .roi import Circle, circle_mask, dish_mask
-from .spots import detect_spots
+from .spots import as_float_gray, detect_spots
 
-DETECTORS = {"blob": detect_blobs, "log": detect_spots}
+DETECTORS = DETECTOR_NAMES
 # Frames whose per-pixel median is a static scene's background: spread over the clip.
 BACKGROUND_FRAMES = 64
 
@@ -51,8 +56,11 @@ class ClipDetector:
     ----------
     options : BlobOptions
         Polarity "auto" is decided on the first frame (:func:`seedtrack.detection.blobs.choose_polarity`).
-    detector : {"blob", "log"}
-        Threshold blobs or Laplacian-of-Gaussian spots (:data:`DETECTORS`).
+    detector : {"auto", "blob", "spot"}
+        Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`), Crocker-Grier spots
+        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame.
+    diameter : int, optional
+        Spot diameter, pixels, odd; measured on the first frame when not given.
     roi : "auto", "none", Circle or ndarray of uint8 (H, W)
         "auto": the dish found on the first frame, or the whole frame if there is none clearly;
         "none": the whole frame; a circle in pixels; a mask, nonzero inside.
@@ -67,6 +75,8 @@ class ClipDetector:
         The region used (255 inside), None for the whole frame; known after the first frame.
     circle : Circle or None
         The dish found or the circle given.
+    choice : DetectorChoice or None
+        The detector that runs, its settings and why; known after the first frame.
 
     Examples
     --------
@@ -85,9 +95,10 @@ class ClipDetector:
     def __init__(
         self,
         options: BlobOptions = BlobOptions(),
-        detector: str = "blob",
+        detector: str = "auto",
         roi: str | Circle | np.ndarray = "auto",
         background: np.ndarray | None = None,
+        diameter: int | None = None,
     ) -> None:
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
@@ -97,24 +108,36 @@ class ClipDetector:
         self.circle = roi if isinstance(roi, Circle) else None
         self.roi = roi if isinstance(roi, np.ndarray) else None
         self._pending_roi = roi
-        self._detect = DETECTORS[detector]
+        self._detector, self._diameter = detector, diameter
+        self.choice: DetectorChoice | None = None
         self._background = background
         self._first = True
 
     def detect(self, image: np.ndarray) -> dict[str, np.ndarray]:
-        """The measurements of one frame (see :func:`seedtrack.detection.blobs.detect_blobs`).
+        """The measurements of one frame (see :func:`seedtrack.detection.blobs.detect_blobs` and
+        :func:`seedtrack.detection.spots.detect_spots`).
 
         Parameters
         ----------
-        image : ndarray of uint8, shape (H, W) or (H, W, 3) BGR
+        image : ndarray, shape (H, W) or (H, W, 3) BGR
+            uint8, or deeper (uint16, float): mapped to 8 bits for blobs by the range of the
+            first frame's data, kept as it is for spots.
         """
-        gray = to_gray(image)
         if self._first:
-            self._decide(gray)
+            # Deeper data keep one map to 8 bits for the whole clip, from their range.
+            self._span = value_range(image)
+        gray = to_gray(image if image.dtype == np.uint8 else to_uint8(image, self._span))
+        # Spots are found on the data's own values, unless a temporal background (8-bit) is
+        # taken off first.
+        native = image if self._background is None else gray
+        if self._first:
+            self._decide(gray, native)
             self._first = False
-        return self._detect(gray, self.options, background=self._background, roi=self.roi)
+        if self.choice.spots is not None:
+            return detect_spots(native, self.choice.spots, roi=self.roi, background=self._background)
+        return detect_blobs(gray, self.options, background=self._background, roi=self.roi)
 
-    def _decide(self, gray: np.ndarray) -> None:
+    def _decide(self, gray: np.ndarray, native: np.ndarray) -> None:
         if isinstance(self._pending_roi, Circle):
             self.roi = circle_mask((gray.shape[1], gray.shape[0]), self._pending_roi)
         elif isinstance(self._pending_roi, str) and self._pending_roi == "auto":
@@ -123,6 +146,8 @@ class ClipDetector:
             raise ValueError(f"the region of interest is {self.roi.shape[1]}x{self.roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
         if self.options.polarity == "auto":
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
+        scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background
+        self.choice = choose_detector(scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi)
 
 
 @dataclass(frozen=True)

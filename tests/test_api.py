@@ -177,8 +177,8 @@ def test_options_are_the_commands_and_mistakes_name_the_keyword():
         seedtrack.link(points.assign(frame=0))
     with pytest.raises(ValueError, match="^tol must be a positive"):
         seedtrack.evaluate(points.assign(track_id=[0, 1, 0, 1]), points.assign(track_id=[0, 1, 0, 1]), tol=0)
-    with pytest.raises(ValueError, match="frame 0 must be an .* array of uint8"):
-        seedtrack.detect([np.zeros((10, 10), np.float32)])
+    with pytest.raises(ValueError, match="frame 0 must be an .* array of uint8, uint16 or float"):
+        seedtrack.detect([np.zeros((10, 10), np.int64)])
     with pytest.raises(ValueError, match="^threshold must be otsu"):
         seedtrack.detect([np.zeros((10, 10), np.uint8)], threshold="high")
     with pytest.raises(ValueError, match="frame 1 is 12x10, the first 10x10"):

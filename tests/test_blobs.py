@@ -6,7 +6,6 @@ from scipy.optimize import linear_sum_assignment
 from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.detection.blobs import BlobOptions, choose_polarity, detect_blobs, to_gray
 from seedtrack.detection.roi import dish_mask, find_dish
-from seedtrack.detection.spots import detect_spots
 from seedtrack.tracking.metrics import match_frame
 
 
@@ -140,20 +139,6 @@ def test_touching_pair_is_split_in_two():
     table = detect_blobs(scene.render(0))
     assert len(table["x"]) == 40
     assert len(detect_blobs(scene.render(0), BlobOptions(split=False))["x"]) == 32
-
-
-def test_log_detector_finds_small_bright_spots_to_a_tenth_of_a_pixel():
-    rng = np.random.default_rng(1)
-    rows, columns = np.mgrid[0:120, 0:160]
-    truth = np.column_stack([rng.uniform(8, 152, 12), rng.uniform(8, 112, 12)])
-    truth = truth[np.argsort(truth[:, 1])]
-    image = np.full((120, 160), 20.0)
-    for x, y in truth:
-        image += 90 * np.exp(-((columns - x) ** 2 + (rows - y) ** 2) / (2 * 1.3**2))
-    image += rng.normal(0, 2, image.shape)
-    table = detect_spots(np.clip(image, 0, 255).astype(np.uint8))
-    assert len(table["x"]) == len(truth)
-    assert nearest_errors(table["x"], table["y"], truth).max() < 0.1
 
 
 def test_dish_is_found_only_when_the_frame_clearly_shows_one():

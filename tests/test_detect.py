@@ -8,6 +8,9 @@ import numpy as np
 import pytest
 
 from seedtrack.cli import main
+from seedtrack.commands.detect import preview_caption
+from seedtrack.detection.choice import choose_detector
+from seedtrack.pipeline import DetectionSettings, detect_clip
 from seedtrack.data.csvio import read_table
 from seedtrack.data.dish import DishSpec, make_dish_scene, write_dish_clip
 from seedtrack.data.video import write_video
@@ -91,7 +94,8 @@ def test_mask_image_limits_the_search(dish, tmp_path):
         (["--roi", "10,10,-3"], "radius > 0"),
         (["--roi", "10,10"], "--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; '10,10' is none"),
         (["--roi", "{folder}/missing.png"], "--roi takes auto, none, a circle X,Y,R"),
-        (["--detector", "log", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
+        (["--detector", "spot", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
+        (["--diameter", "4"], "--diameter must be an odd number of pixels >= 3, got 4"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed (0..3)"),
         (["--preview", "{folder}/p.txt"], "name an image file"),
     ],
@@ -153,3 +157,24 @@ def test_temporal_background_ignores_what_never_moves(tmp_path):
         assert np.array_equal(np.bincount(table["frame"].astype(int)), np.full(9, per_frame)), background
     np.testing.assert_allclose(table["y"], 40, atol=0.1)
     np.testing.assert_allclose(table["x"], 10 + 12 * np.arange(9), atol=0.1)
+
+
+def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, capsys):
+    # Round bright spots: the spot detector, whose diameter and least mass the caption gives.
+    rng = np.random.default_rng(4)
+    rows, columns = np.mgrid[0:120, 0:160]
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    centres = rng.uniform(12, 108, (15, 2))
+    for k in range(2):
+        image = 20 + sum(90 * np.exp(-((columns - x - k) ** 2 + (rows - y) ** 2) / 4.5) for x, y in centres)
+        cv2.imwrite(str(folder / f"{k}.png"), np.clip(image + rng.normal(0, 2, image.shape), 0, 255).astype(np.uint8))
+    assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), "--preview", str(tmp_path / "p.png")]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("detector: small round spots") and "diameter 11 px" in first
+    found = detect_clip(folder, say=lambda line: None)
+    assert preview_caption(found.choice, DetectionSettings()).startswith("spot detector: diameter 11 px, least mass")
+    assert preview_caption(choose_detector(np.zeros((8, 8)), "dark", detector="blob"), DetectionSettings()) == (
+        "blob detector: threshold otsu, area 4 px and up"
+    )
+    assert cv2.imread(str(tmp_path / "p.png")) is not None

@@ -130,17 +130,19 @@ def test_colour_and_alpha_images_become_bgr(tmp_path):
     assert tuple(image[0, 0]) == (200, 0, 50)
 
 
-def test_sixteen_bit_images_are_scaled_by_the_first_frame(tmp_path):
+def test_sixteen_bit_images_are_scaled_by_the_range_of_their_data(tmp_path):
     folder = tmp_path / "frames"
     folder.mkdir()
+    # 12-bit data (brightest 3000 < 4096) in 16-bit words: 0..4095 is black to white, whatever
+    # the first frame's own darkest and brightest pixels; later frames keep that map.
     first = np.full((20, 30), 1000, np.uint16)
     first[0, :] = 3000
     cv2.imwrite(str(folder / "f1.tif"), first)
     cv2.imwrite(str(folder / "f2.tif"), np.full((20, 30), 2000, np.uint16))
     cv2.imwrite(str(folder / "f3.tif"), np.full((20, 30), 5000, np.uint16))
     images = [image for _, image in open_frames(folder)]
-    assert images[0][0, 0, 0] == 255 and images[0][5, 5, 0] == 0
-    assert images[1][5, 5, 0] == 128
+    assert images[0][0, 0, 0] == round(3000 * 255 / 4095) and images[0][5, 5, 0] == round(1000 * 255 / 4095)
+    assert images[1][5, 5, 0] == round(2000 * 255 / 4095)
     assert images[2][5, 5, 0] == 255
 
 

@@ -18,6 +18,7 @@ from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import IMAGE_SUFFIXES
 from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
+from seedtrack.detection.choice import describe
 from seedtrack.detection.roi import Circle
 
 from ..errors import UsageError, option_name, output_file
@@ -37,10 +38,19 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("detection")
     group.add_argument(
         "--detector",
-        choices=sorted(DETECTORS),
-        default="blob",
-        help="blob: threshold and connected pixels (fast, any shape); log: Laplacian of Gaussian for small "
-        "round spots, particles and beads (slower) (default blob)",
+        choices=DETECTORS,
+        default="auto",
+        help="blob: threshold and connected pixels, split where touching (seeds: dark, elongated, touching); "
+        "spot: band-pass, local maxima and brightness centroids, Crocker and Grier (beads, particles: small, "
+        "round, faint); auto: spot when the first frame's strongest objects are small and round, else blob "
+        "(default auto)",
+    )
+    group.add_argument(
+        "--diameter",
+        type=int,
+        default=None,
+        metavar="PX",
+        help="spot diameter, pixels, odd, a little larger than a spot (default: measured on the first frame)",
     )
     group.add_argument(
         "--polarity",
@@ -105,8 +115,10 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             threshold = float(threshold)
         except ValueError:
             raise UsageError(f"--threshold must be otsu, adaptive or a number of grey levels, got {args.threshold!r}") from None
-    if threshold == "adaptive" and args.detector == "log":
+    if threshold == "adaptive" and args.detector == "spot":
         raise UsageError("--threshold adaptive works with --detector blob only")
+    if args.diameter is not None and (args.diameter < 3 or args.diameter % 2 == 0):
+        raise UsageError(f"--diameter must be an odd number of pixels >= 3, got {args.diameter}")
     try:
         options = BlobOptions(
             polarity=args.polarity,
@@ -125,7 +137,7 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             raise UsageError(f"--{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}")
     if args.end is not None and args.end <= args.start:
         raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
-    return DetectionSettings(options, args.detector, _roi(args.roi), args.start, args.end, args.step)
+    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step)
 
 
 # BlobOptions names its fields in its errors; a user knows the options. Longest names first, so
@@ -151,9 +163,12 @@ def _roi(text: str) -> str | Circle | Path:
     return Path(text)
 
 
-def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndarray | None, circle: Circle | None, frame_index: int) -> np.ndarray:
+def draw_preview(
+    frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndarray | None, circle: Circle | None, frame_index: int, detector: str = ""
+) -> np.ndarray:
     """The frame enlarged, each detection ringed in red at its size and the region of interest
-    outlined in green, with the frame index and the count written in the corner.
+    outlined in green, with the frame index, the count and ``detector`` (which detector ran,
+    its size and threshold) written in the corner.
 
     Returns
     -------
@@ -177,7 +192,18 @@ def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndar
     for (x, y), r in zip(centres, radii):
         cv2.circle(page, (int(x), int(y)), int(r), _FOUND_BGR, 1, cv2.LINE_AA, SHIFT)
     draw_text(page, f"frame {frame_index}: {len(columns['x'])} found", (8, 24), (255, 255, 255), 0.7, 1)
+    if detector:
+        draw_text(page, detector, (8, 52), (255, 255, 255), 0.6, 1)
     return page
+
+
+def preview_caption(choice, settings: DetectionSettings) -> str:
+    """Which detector ran, with its size and threshold, in a few words for the preview."""
+    if choice.spots is not None:
+        return f"spot detector: {describe(choice.spots)}"
+    options = settings.options
+    threshold = options.threshold if isinstance(options.threshold, str) else f"{options.threshold:g} grey levels"
+    return f"blob detector: threshold {threshold}, area {options.min_area_px or 0:g} px and up"
 
 
 def add_parser(subparsers) -> None:
@@ -222,7 +248,7 @@ def run(args: argparse.Namespace) -> int:
             message += f"; no preview: frame {preview_frame} was not read"
         else:
             column = int(np.searchsorted(found.detections.frame_indices, preview_frame))
-            page = draw_preview(found.preview, found.detections.columns[column], found.roi, found.circle, preview_frame)
+            page = draw_preview(found.preview, found.detections.columns[column], found.roi, found.circle, preview_frame, preview_caption(found.choice, settings))
             with atomic_path(args.preview) as temporary:
                 if not cv2.imwrite(str(temporary), page):
                     raise DataError(args.preview, "cannot write the preview image")

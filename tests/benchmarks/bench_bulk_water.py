@@ -1,0 +1,108 @@
+"""seedtrack against trackpy's confident tracks on real bead footage, default options.
+
+Run as ``python tests/benchmarks/bench_bulk_water.py [CLIP]`` (default
+``shared/data/bulk-water-240-479.mp4`` beside the checkout). The reference is trackpy as its tutorial runs it on
+this recording: ``batch(frames, diameter=11, minmass=20, invert=True)``, ``link(search_range=5,
+memory=3)``, ``filter_stubs(25)``: tracks of 25 frames or more, so real beads. Prints
+
+- detection: the share of the confident tracks' positions that ``seedtrack run`` (defaults) has a
+  detection for within 1 px;
+- tracking: the share of confident tracks that one seedtrack track reproduces, meaning that a
+  single seedtrack track lies within 1 px of at least 80% of the confident track's points (in
+  the same frames; interpolated positions count, as they stand for the bead).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import trackpy
+from scipy.spatial import cKDTree
+
+from seedtrack.data.csvio import read_table
+from seedtrack.data.frames import open_frames
+from seedtrack.detection.blobs import to_gray
+
+# trackpy's clip in shared/data beside the checkout (or beside the folder of worktrees).
+CLIP = next(
+    (folder / "shared" / "data" / "bulk-water-240-479.mp4" for folder in Path(__file__).resolve().parents if (folder / "shared" / "data").is_dir()),
+    Path("bulk-water-240-479.mp4"),
+)
+# A confident track is reproduced when one track holds this share of its points within 1 px.
+REPRODUCED_SHARE = 0.8
+TOLERANCE_PX = 1.0
+
+
+def confident_tracks(clip: Path) -> pd.DataFrame:
+    """trackpy's confident tracks (frame, x, y, particle), as its tutorial makes them."""
+    trackpy.quiet()
+    with open_frames(clip) as source:
+        frames = [to_gray(image) for _, image in source]
+    features = trackpy.batch(frames, diameter=11, minmass=20, invert=True, processes=1)
+    linked = trackpy.link(features, search_range=5, memory=3)
+    return trackpy.filter_stubs(linked, 25)
+
+
+def found_within(reference: pd.DataFrame, table: dict[str, np.ndarray], ids: np.ndarray | None = None) -> np.ndarray:
+    """Per reference point, the index of the nearest row of ``table`` in its frame within 1 px, or -1."""
+    nearest = np.full(len(reference), -1)
+    frames = reference["frame"].to_numpy()
+    for frame in np.unique(frames):
+        here = np.flatnonzero(table["frame"] == frame)
+        wanted = np.flatnonzero(frames == frame)
+        if here.size == 0:
+            continue
+        distance, index = cKDTree(np.column_stack((table["x"][here], table["y"][here]))).query(
+            reference[["x", "y"]].to_numpy()[wanted], distance_upper_bound=TOLERANCE_PX
+        )
+        close = np.isfinite(distance)
+        nearest[wanted[close]] = here[index[close]]
+    return nearest
+
+
+def reproduced(reference: pd.DataFrame, tracks: dict[str, np.ndarray]) -> tuple[int, int]:
+    """(confident tracks reproduced by one seedtrack track, confident tracks)."""
+    row = found_within(reference, tracks)
+    track = np.where(row >= 0, tracks["track_id"][np.maximum(row, 0)], -1)
+    table = pd.DataFrame({"particle": reference["particle"].to_numpy(), "track": track})
+    length = table.groupby("particle").size()
+    held = table[table.track >= 0].groupby(["particle", "track"]).size().groupby("particle").max()
+    share = (held.reindex(length.index, fill_value=0) / length).to_numpy()
+    return int(np.sum(share >= REPRODUCED_SHARE)), len(length)
+
+
+def main() -> None:
+    clip = Path(sys.argv[1]) if len(sys.argv) > 1 else CLIP
+    reference = confident_tracks(clip)
+    with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
+        result = subprocess.run([sys.executable, "-m", "seedtrack", "run", str(clip), "--out", folder], capture_output=True, text=True)
+        seconds = time.perf_counter() - start
+        if result.returncode != 0:
+            raise SystemExit(result.stderr)
+        detections = read_table(Path(folder) / "detections.csv")
+        tracks = read_table(Path(folder) / "tracks.csv")
+    print(result.stdout.strip().splitlines()[0])
+    frames = reference["frame"].nunique()
+    print(
+        f"{clip.name}: trackpy's confident tracks: {reference['particle'].nunique()} tracks, "
+        f"{len(reference)} positions ({len(reference) / frames:.0f} a frame); seedtrack run (defaults, {seconds:.0f} s): "
+        f"{len(detections['x']) / frames:.0f} detections a frame, {len(np.unique(tracks['track_id']))} tracks"
+    )
+    hit = found_within(reference, detections) >= 0
+    print(f"  positions of confident tracks with a seedtrack detection within {TOLERANCE_PX:g} px: {hit.mean():.4f} (goal 0.95)")
+    count, total = reproduced(reference, tracks)
+    print(
+        f"  confident tracks reproduced (one seedtrack track within {TOLERANCE_PX:g} px of >= {REPRODUCED_SHARE:.0%} of "
+        f"their points): {count} of {total}, {count / total:.4f} (goal 0.90)"
+    )
+
+
+if __name__ == "__main__":
+    main()

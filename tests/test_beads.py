@@ -1,0 +1,49 @@
+"""The README's figures on real footage: trackpy's bulk-water beads (BSD licence), found in
+shared/data beside the checkout (or beside the folder of worktrees), or where SEEDTRACK_BEADS says."""
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from seedtrack.data.frames import open_frames
+from seedtrack.detection.blobs import to_gray
+from seedtrack.pipeline import DetectionSettings, detect_clip
+
+_SHARED = next((folder / "shared" / "data" for folder in Path(__file__).resolve().parents if (folder / "shared" / "data").is_dir()), Path("."))
+BEADS = Path(os.environ.get("SEEDTRACK_BEADS", _SHARED / "bulk-water-240-479.mp4"))
+needs_beads = pytest.mark.skipif(not BEADS.exists(), reason=f"the real bead footage is not at {BEADS} (set SEEDTRACK_BEADS)")
+
+
+def quiet(line):
+    pass
+
+
+@needs_beads
+def test_beads_get_the_spot_detector_at_trackpys_diameter():
+    found = detect_clip(BEADS, DetectionSettings(end=6), say=quiet)
+    assert found.choice.name == "spot" and found.choice.spots.diameter == 11 and found.choice.spots.polarity == "dark"
+    counts = [len(columns["x"]) for columns in found.detections.columns]
+    assert 900 <= np.median(counts) <= 1300, counts
+
+
+@needs_beads
+@pytest.mark.parametrize("detector", ["auto", "blob"])
+def test_same_beads_in_8_16_bit_and_float_tiffs_give_the_same_detections(tmp_path, detector):
+    with open_frames(BEADS, end=3) as source:
+        frames = [to_gray(image) for _, image in source]
+    folders = {name: tmp_path / name for name in ("png8", "tif16", "tif32")}
+    for folder in folders.values():
+        folder.mkdir()
+    for k, frame in enumerate(frames):
+        cv2.imwrite(str(folders["png8"] / f"{k}.png"), frame)
+        cv2.imwrite(str(folders["tif16"] / f"{k}.tif"), frame.astype(np.uint16) * 257)
+        cv2.imwrite(str(folders["tif32"] / f"{k}.tif"), frame.astype(np.float32) / 255)
+    settings = DetectionSettings(detector=detector)
+    tables = {name: detect_clip(folder, settings, say=quiet).detections.to_rows() for name, folder in folders.items()}
+    assert len(tables["png8"]["x"]) > 1000
+    for name in ("tif16", "tif32"):
+        assert len(tables[name]["x"]) == len(tables["png8"]["x"]), name
+        np.testing.assert_allclose(tables[name]["x"], tables["png8"]["x"], atol=1e-3)

@@ -1,0 +1,108 @@
+"""The spot detector (Crocker and Grier) and the detector choice, on small exact scenes."""
+
+import cv2
+import numpy as np
+import pytest
+
+from seedtrack.data.depth import value_range
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
+from seedtrack.detection.blobs import to_gray
+from seedtrack.detection.choice import choose_detector
+from seedtrack.detection.roi import dish_mask
+from seedtrack.detection.spots import SpotSettings, detect_spots, fit_spot_settings, pixel_noise, spot_shape
+from seedtrack.tracking.metrics import match_frame
+
+ROWS, COLUMNS = np.mgrid[0:80, 0:100].astype(np.float32)
+
+
+def gaussians(centres, sigma=1.5, amplitude=80.0, background=20.0):
+    image = np.full(ROWS.shape, background, np.float32)
+    for x, y in centres:
+        image += amplitude * np.exp(-((COLUMNS - x) ** 2 + (ROWS - y) ** 2) / (2 * sigma**2))
+    return image
+
+
+def test_one_spot_is_found_at_its_sub_pixel_centre():
+    found = detect_spots(gaussians([(40.3, 30.7)]), SpotSettings(diameter=11, min_mass=10))
+    assert len(found["x"]) == 1
+    assert abs(found["x"][0] - 40.3) < 0.02 and abs(found["y"][0] - 30.7) < 0.02
+
+
+def test_dark_spots_need_dark_polarity():
+    image = 200 - gaussians([(20.0, 20.0), (70.0, 50.0)])
+    assert len(detect_spots(image, SpotSettings(11, 10, "dark"))["x"]) == 2
+    # Taken for light spots, dark ones are holes ringed by light: nothing at their centres.
+    light = detect_spots(image, SpotSettings(11, 10, "light"))
+    assert not any((np.hypot(light["x"] - x, light["y"] - y) <= 2).any() for x, y in ((20, 20), (70, 50)))
+
+
+def test_a_blank_frame_and_a_frame_of_noise_give_no_spot():
+    assert len(detect_spots(np.full((50, 60), 7, np.uint8), SpotSettings(7, 0))["x"]) == 0
+    noise = np.random.default_rng(0).normal(100, 5, (256, 256)).astype(np.float32)
+    assert len(detect_spots(noise, fit_spot_settings(noise, "light", diameter=7))["x"]) <= 3
+
+
+def test_the_least_mass_drops_faint_spots():
+    image = gaussians([(20.0, 20.0)], amplitude=80) + gaussians([(70.0, 50.0)], amplitude=8, background=0)
+    masses = detect_spots(image, SpotSettings(11, 0, floor=1.0))["mass"]
+    bar = float(np.mean(masses))
+    kept = detect_spots(image, SpotSettings(11, bar, floor=1.0))
+    assert len(masses) == 2 and list(kept["x"].round()) == [20.0]
+
+
+def test_touching_spots_stay_apart():
+    found = detect_spots(gaussians([(40.0, 40.0), (46.0, 40.0)]), SpotSettings(diameter=11, min_mass=10))
+    assert len(found["x"]) == 2
+    np.testing.assert_allclose(np.sort(found["x"]), [40.0, 46.0], atol=0.35)
+
+
+def test_same_content_in_8_16_bit_and_float_gives_the_same_spots():
+    image = np.clip(gaussians([(30.2, 20.6), (70.0, 55.0)]) + np.random.default_rng(1).normal(0, 3, ROWS.shape), 0, 255).astype(np.uint8)
+    tables = []
+    for frame in (image, image.astype(np.uint16) * 257, image.astype(np.float32) / 255):
+        tables.append(detect_spots(frame, fit_spot_settings(frame, "light")))
+    for table in tables[1:]:
+        np.testing.assert_allclose(table["x"], tables[0]["x"], atol=1e-3)
+    assert value_range(image.astype(np.uint16) * 257) == (0.0, 65535.0)
+
+
+def test_pixel_noise_is_measured_not_assumed():
+    rng = np.random.default_rng(2)
+    assert pixel_noise(rng.normal(100, 4, (128, 128))) == pytest.approx(4, rel=0.05)
+    steps = (np.arange(32 * 32).reshape(32, 32) % 2 + 9).astype(np.uint16) * 257
+    assert pixel_noise(steps) >= 257 / np.sqrt(12)
+
+
+def test_spot_size_is_estimated_from_the_image():
+    assert spot_shape(gaussians([(30.0, 30.0), (70.0, 50.0)], sigma=1.0)).diameter == 7
+    assert spot_shape(gaussians([(30.0, 30.0), (70.0, 50.0)], sigma=2.0)).diameter == 13
+
+
+def test_generated_spots_at_snr_4_are_found_with_few_false_ones():
+    field = make_spot_field(SpotFieldSpec(width=256, height=256, spots=50, touching_pairs=0, rings=5, snr=4.0, random_seed=5))
+    found = detect_spots(field.image, fit_spot_settings(field.image, "light"))
+    rows, _ = match_frame(np.column_stack((found["x"], found["y"])), field.xy, 2.0)
+    assert len(rows) >= 48 and len(found["x"]) <= 52
+
+
+def test_the_choice_takes_spots_for_round_beads_and_blobs_for_seeds():
+    field = make_spot_field(SpotFieldSpec(width=256, height=256, spots=40, touching_pairs=0, rings=0, snr=8.0, random_seed=3))
+    assert choose_detector(field.image, "light").name == "spot"
+    gray = to_gray(make_dish_scene(DishSpec(frames=1)).render(0))
+    roi, _ = dish_mask(gray)
+    choice = choose_detector(gray, "dark", roi=roi)
+    assert choice.name == "blob" and "elongated" in choice.reason
+    assert choose_detector(gray, "dark", detector="spot", roi=roi).name == "spot"
+
+
+def test_the_api_finds_spots_in_16_bit_and_float_frames_on_their_own_values():
+    import seedtrack
+
+    field = make_spot_field(SpotFieldSpec(width=128, height=128, spots=10, touching_pairs=0, rings=0, snr=8.0, random_seed=2))
+    photons = np.clip(field.image, 0, None) * 100
+    deep = seedtrack.detect([np.round(photons).astype(np.uint16)])
+    floating = seedtrack.detect([photons.astype(np.float32)])
+    rows, _ = match_frame(deep[["x", "y"]].to_numpy(), field.xy, 1.0)
+    assert len(deep) == len(floating) and len(rows) == 10
+    np.testing.assert_allclose(deep["x"], floating["x"], atol=1e-3)
