@@ -6,6 +6,8 @@ clip's length does not bound what can be processed.
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
 import sys
 from dataclasses import dataclass, replace
@@ -19,7 +21,6 @@ from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
-from seedtrack.data.video import write_video
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
 from seedtrack.detection.roi import Circle, circle_mask, dish_mask
@@ -30,7 +31,8 @@ from seedtrack.tracking.regime import choose_motion, fit_motion, track_without_d
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
-from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_legend
+from .parallel import encode_video, ordered_map
+from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
 
@@ -119,7 +121,9 @@ class ClipDetections:
     preview: np.ndarray | None
 
 
-def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None) -> ClipDetections:
+def detect_clip(
+    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, workers: int = 1
+) -> ClipDetections:
     """Detect objects in every frame of a clip, with a progress bar.
 
     A video that breaks off part way keeps the frames decoded before, and one line on standard
@@ -132,6 +136,9 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
     settings : DetectionSettings
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
+    workers : int
+        Processes detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
+        the same for any number.
 
     Raises
     ------
@@ -150,24 +157,32 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         roi, circle = _given_roi(settings.roi, source.size)
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detect = DETECTORS[settings.detector]
         options = settings.options
         indices: list[int] = []
         columns: list[dict[str, np.ndarray]] = []
         preview = None
-        with progress_bar(source.frame_count, "detecting") as bar:
-            for index, image in source:
-                gray = to_gray(image)
-                if not indices:
-                    if settings.roi == "auto":
-                        roi, circle = dish_mask(gray)
-                    if options.polarity == "auto":
-                        # Once per clip: a frame with little in it must not flip it.
-                        options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
+        frames = iter(source)
+        first = next(frames, None)
+        if first is not None:
+            gray = to_gray(first[1])
+            if settings.roi == "auto":
+                roi, circle = dish_mask(gray)
+            if options.polarity == "auto":
+                # Once per clip: a frame with little in it must not flip it.
+                options = replace(options, polarity=choose_polarity(gray, background_of(gray, options, background), roi))
+
+        def grays():
+            nonlocal preview
+            for index, image in itertools.chain([first], frames) if first is not None else ():
                 indices.append(index)
-                columns.append(detect(gray, options, background=background, roi=roi))
                 if index == preview_frame:
                     preview = image.copy()
+                yield to_gray(image)
+
+        detect = functools.partial(DETECTORS[settings.detector], options=options, background=background, roi=roi)
+        with progress_bar(source.frame_count, "detecting") as bar:
+            for found in ordered_map(detect, grays(), workers):
+                columns.append(found)
                 bar.update(1)
         if not indices:
             raise DataError(path, source.stopped_early or "no frame could be read")
@@ -235,12 +250,21 @@ def link_frames(frames: list[np.ndarray], config: GOAConfig, lifecycle: Lifecycl
 
 
 def render_overlay(
-    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
+    path: Path,
+    tracks: Tracks,
+    detections: Detections,
+    out: Path,
+    fps: float,
+    trail: int = 10,
+    selection: DetectionSettings | None = None,
+    workers: int = 1,
 ) -> None:
     """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`seedtrack.drawing`),
     of the frames ``selection.start``, ``end`` and ``step`` select, if given.
 
-    Detections that no track holds are marked as false detections.
+    Detections that no track holds are marked as false detections. With ``workers`` > 1 the
+    encoder has a process of its own and ``workers`` - 1 processes draw (one: this one); the
+    file is the same for any number.
     """
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
@@ -248,9 +272,15 @@ def render_overlay(
         layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
         rows = detections.to_rows()
         false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
-        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(True))
+        draw = functools.partial(_annotate_pair, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
         with progress_bar(source.frame_count, "rendering") as bar:
-            write_video(out, (image for _, image in frames), fps, progress=bar)
+            encode_video(out, ordered_map(draw, source, workers - 1), fps, workers, progress=bar)
+
+
+def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
+    """:func:`seedtrack.drawing.annotate` of a frame source's ``(frame_index, image)``."""
+    index, image = frame
+    return annotate(image, index, **options)
 
 
 def run_pipeline(
@@ -261,21 +291,23 @@ def run_pipeline(
     lifecycle: LifecycleConfig | None = LifecycleConfig(),
     min_length: int = 0,
     motion: str = "auto",
+    workers: int = 1,
 ) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
     Tracking is :func:`link_frames` with ``lifecycle`` and ``config`` fitted to ``motion`` (see
     :func:`track_with_motion`); tracks spanning fewer than ``min_length`` frames are not written.
+    Detection and drawing use ``workers`` processes; the files are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
     """
     with output_folder(out):
-        found = detect_clip(clip, settings)
+        found = detect_clip(clip, settings, workers=workers)
         detections = found.detections
         write_table(out / "detections.csv", detections.to_rows())
         tracks = track_with_motion(detections.points, config, motion, lambda frames, fitted: link_frames(frames, fitted, lifecycle))
         tracks = drop_short(tracks, min_length)
         write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings)
+        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=settings, workers=workers)
     return detections, tracks
