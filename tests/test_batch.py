@@ -1,6 +1,11 @@
 """``seedtrack batch`` against a Dask scheduler started here, on 127.0.0.1 with two worker processes."""
 
 import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -80,3 +85,26 @@ def test_an_unreachable_scheduler_is_one_line(clips, tmp_path, capsys):
     assert main(["batch", str(clips / "first.mp4"), "--out", str(tmp_path / "b"), "--scheduler", "tcp://127.0.0.1:9"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot reach a Dask scheduler" in err
+
+
+def test_ctrl_c_stops_with_one_line_and_keeps_finished_clips(tmp_path):
+    # A local cluster of one worker, started by the command; interrupted after the first clip.
+    for index in range(4):
+        write_dish_clip(DishSpec(seeds=12, frames=30, width=192, height=160, rim_speed=10.0, random_seed=index), tmp_path / f"c{index}")
+    inputs = [tmp_path / f"c{index}" / "clip.mp4" for index in range(4)]
+    for index, clip in enumerate(inputs):
+        clip.rename(tmp_path / f"c{index}.mp4")
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "seedtrack", "batch", *(str(tmp_path / f"c{i}.mp4") for i in range(4)), "--out", str(out), "--workers", "1"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not (out / "batch.csv").exists() and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert stderr.strip().splitlines() == ["seedtrack batch: interrupted; files already written are complete"]
+    table = read_table(out / "batch.csv", others_as_text=True)
+    assert 1 <= len(table["status"]) < 4 and set(table["status"]) == {"done"}
+    for clip in table["input"]:
+        assert (out / Path(clip).stem / "overlay.mp4").is_file()
