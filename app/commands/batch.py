@@ -98,7 +98,9 @@ def _client(scheduler: str | None, workers: int):
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
-            dashboard_address=None,
+            # Its status page too on a free port of the loopback interface: the default, 8787
+            # on every interface, is taken by a second batch and open to the network.
+            dashboard_address="127.0.0.1:0",
             silence_logs=logging.ERROR,
         )
     finally:
