@@ -20,6 +20,10 @@ from .detect import add_detection_options, detection_settings
 from .run import add_tracker_options, lifecycle_config, tracker_config, workers_count
 
 
+# How long to keep trying to reach a scheduler named by --scheduler.
+CONNECT_TIMEOUT = "10s"
+
+
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "batch",
@@ -83,7 +87,7 @@ def _client(scheduler: str | None, workers: int):
 
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
         except (OSError, TimeoutError, ValueError) as error:
             raise UsageError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there ({error})") from None
         with client:
