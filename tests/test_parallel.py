@@ -37,7 +37,8 @@ def test_default_workers_is_the_usable_cores():
     assert 1 <= default_workers()
 
 
-def test_run_gives_the_same_bytes_with_one_and_two_workers(tmp_path):
+def test_run_gives_the_same_bytes_with_one_two_and_three_workers(tmp_path):
+    # With three the overlay is drawn in worker processes too, not only encoded in one.
     write_dish_clip(DishSpec(seeds=20, frames=12, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
     for workers in ("1", "2"):
         assert main(["run", str(tmp_path / "clip" / "clip.mp4"), "--out", str(tmp_path / workers), "--workers", workers]) == 0
