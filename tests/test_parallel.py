@@ -40,10 +40,11 @@ def test_default_workers_is_the_usable_cores():
 def test_run_gives_the_same_bytes_with_one_two_and_three_workers(tmp_path):
     # With three the overlay is drawn in worker processes too, not only encoded in one.
     write_dish_clip(DishSpec(seeds=20, frames=12, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
-    for workers in ("1", "2"):
+    for workers in ("1", "2", "3"):
         assert main(["run", str(tmp_path / "clip" / "clip.mp4"), "--out", str(tmp_path / workers), "--workers", workers]) == 0
     for name in ("detections.csv", "tracks.csv", "overlay.mp4"):
-        assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "2" / name).read_bytes(), name
+        for workers in ("2", "3"):
+            assert (tmp_path / "1" / name).read_bytes() == (tmp_path / workers / name).read_bytes(), (name, workers)
 
 
 def test_workers_below_one_is_refused(tmp_path, capsys):
