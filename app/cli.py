@@ -14,10 +14,10 @@ from typing import Sequence
 
 from seedtrack.data.errors import DataError
 
-from .commands import annotate, compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
+from .commands import annotate, batch, compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
 from .errors import UsageError
 
-COMMANDS = (run, demo, detect, track, render, compare, evaluate, correct, review, annotate, synth, experiment)
+COMMANDS = (run, batch, demo, detect, track, render, compare, evaluate, correct, review, annotate, synth, experiment)
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130

@@ -10,6 +10,7 @@ clip's length does not bound what can be processed.
 
 from __future__ import annotations
 
+import functools
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +23,6 @@ from seedtrack.data.csvio import TRACK_COLUMNS, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
-from seedtrack.data.video import write_video
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
@@ -35,7 +35,8 @@ from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
-from .drawing import FalseDetections, TrackLayer, View, annotate_frames, track_legend
+from .parallel import encode_video, ordered_map
+from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
 
@@ -105,7 +106,10 @@ class ClipDetections:
 
 
 def detect_clip(
-    path: Path, settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None, say: Callable[[str], None] | None = print
+    path: Path,
+    settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None,
+    say: Callable[[str], None] | None = print,
+    workers: int = 1,
 ) -> ClipDetections:
     """Detect objects in every frame of a clip, with a progress bar
     (:class:`seedtrack.detection.clip.ClipDetector` on the frames read).
@@ -123,6 +127,9 @@ def detect_clip(
     settings : DetectionSettings
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
+    workers : int
+        Processes detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
+        the same for any number.
 
     Raises
     ------
@@ -152,7 +159,7 @@ def detect_clip(
                     yield index, image
                     bar.update(1)
 
-            detections = detect_frames(frames(), detector)
+            detections = detect_frames(frames(), detector, functools.partial(ordered_map, workers=workers))
         if not detections.columns:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
@@ -348,12 +355,21 @@ def track_frames(
 
 
 def render_overlay(
-    path: Path, tracks: Tracks, detections: Detections, out: Path, fps: float, trail: int = 10, selection: DetectionSettings | None = None
+    path: Path,
+    tracks: Tracks,
+    detections: Detections,
+    out: Path,
+    fps: float,
+    trail: int = 10,
+    selection: DetectionSettings | None = None,
+    workers: int = 1,
 ) -> None:
     """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`seedtrack.drawing`),
     of the frames ``selection.start``, ``end`` and ``step`` select, if given.
 
-    Detections that no track holds are marked as false detections.
+    Detections that no track holds are marked as false detections. With ``workers`` > 1 the
+    encoder has a process of its own and ``workers`` - 1 processes draw (one: this one); the
+    file is the same for any number.
     """
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
@@ -361,21 +377,28 @@ def render_overlay(
         layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
         rows = detections.to_rows()
         false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
-        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(True))
+        draw = functools.partial(_annotate_pair, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
         with progress_bar(source.frame_count, "rendering") as bar:
-            write_video(out, (image for _, image in frames), fps, progress=bar)
+            encode_video(out, ordered_map(draw, source, workers - 1), fps, workers, progress=bar)
 
 
-def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings()) -> tuple[Detections, Tracks]:
+def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
+    """:func:`seedtrack.drawing.annotate` of a frame source's ``(frame_index, image)``."""
+    index, image = frame
+    return annotate(image, index, **options)
+
+
+def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`.
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
+    ``workers`` processes; the files are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
     """
     with output_folder(out):
-        found = detect_clip(clip, detection)
+        found = detect_clip(clip, detection, workers=workers)
         detections = found.detections
         rows = detections.to_rows()
         write_table(out / "detections.csv", rows)
@@ -383,5 +406,5 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
         write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=detection)
+        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=detection, workers=workers)
     return detections, tracks

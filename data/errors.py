@@ -9,6 +9,10 @@ class DataError(Exception):
         self.path = path
         self.problem = problem
 
+    def __reduce__(self):
+        # Rebuilt from its two parts, so that it survives the trip back from a worker process.
+        return type(self), (self.path, self.problem)
+
     @classmethod
     def not_utf8(cls, path, error: UnicodeDecodeError) -> "DataError":
         """The error for a text file in another encoding (Excel's plain "CSV" is cp1252)."""

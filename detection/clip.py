@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -180,8 +180,24 @@ class Detections:
         return rows
 
 
-def detect_frames(frames: Iterable[tuple[int, np.ndarray]], detector: ClipDetector) -> Detections:
+def detect_frames(
+    frames: Iterable[tuple[int, np.ndarray]],
+    detector: ClipDetector,
+    map_frames: Callable[[Callable, Iterable[np.ndarray]], Iterable[dict[str, np.ndarray]]] = map,
+) -> Detections:
     """Run ``detector`` on ``(frame index, image)`` pairs, in order.
+
+    Parameters
+    ----------
+    frames : iterable of (int, ndarray)
+        0-based frame index and image.
+    detector : ClipDetector
+        Decides polarity, region and detector on the first frame, here; the other frames are
+        then independent of each other.
+    map_frames : callable
+        ``map_frames(function, images)`` yields ``function(image)`` for each image in order, such
+        as the built-in ``map`` or a process pool's ordered map (``function`` is picklable once
+        the first frame is decided).
 
     Examples
     --------
@@ -190,10 +206,19 @@ def detect_frames(frames: Iterable[tuple[int, np.ndarray]], detector: ClipDetect
     >>> detect_frames(enumerate([blank, blank]), ClipDetector(roi="none")).frame_indices.tolist()
     [0, 1]
     """
-    indices, columns = [], []
-    for index, image in frames:
-        indices.append(index)
-        columns.append(detector.detect(image))
+    frames = iter(frames)
+    first = next(frames, None)
+    if first is None:
+        return Detections(np.empty(0, dtype=np.int64), [])
+    indices = [first[0]]
+    columns = [detector.detect(first[1])]
+
+    def rest():
+        for index, image in frames:
+            indices.append(index)
+            yield image
+
+    columns.extend(map_frames(detector.detect, rest()))
     return Detections(np.array(indices, dtype=np.int64), columns)
 
 

@@ -11,6 +11,7 @@ from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.regime import MOTIONS
 
 from ..errors import UsageError, option_name
+from ..parallel import default_workers
 from ..pipeline import TrackingSettings, run_pipeline
 from ..wording import counted
 from .detect import add_detection_options, detection_settings
@@ -135,6 +136,33 @@ def tracking_settings(args: argparse.Namespace, config: GOAConfig | None = None)
     )
 
 
+def add_workers_option(parser: argparse.ArgumentParser) -> None:
+    """``--workers N``: processes working on one clip (the files do not depend on it)."""
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"processes detecting, drawing and encoding at once; the files are the same for any N "
+        f"(default: the cores this program may use, here {default_workers()})",
+    )
+
+
+def workers_count(args: argparse.Namespace) -> int:
+    """The ``--workers`` asked for, or the cores available.
+
+    Raises
+    ------
+    UsageError
+        If --workers is below 1.
+    """
+    if args.workers is None:
+        return default_workers()
+    if args.workers < 1:
+        raise UsageError(f"--workers must be a whole number >= 1, got {args.workers}")
+    return args.workers
+
+
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run",
@@ -147,11 +175,12 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     add_detection_options(parser)
     add_tracker_options(parser)
+    add_workers_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args))
+    detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args), workers_count(args))
     measured = sum(len(c["x"]) for c in detections.columns)
     print(
         f"{counted(len(detections.columns), 'frame')}, {counted(measured, 'detection')}, {counted(tracks.n_tracks, 'track')}; "

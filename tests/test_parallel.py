@@ -1,0 +1,52 @@
+"""Work over frames in several processes: the same results, in the same order, as one."""
+
+import functools
+
+import numpy as np
+import pytest
+
+from seedtrack.cli import main
+from seedtrack.data.dish import DishSpec, write_dish_clip
+from seedtrack.parallel import default_workers, ordered_map
+
+
+def _square_or_fail(value: int) -> int:
+    if value == 7:
+        raise ValueError("seven")
+    return value * value
+
+
+def test_ordered_map_keeps_the_order_of_the_items():
+    items = range(40)
+    assert list(ordered_map(_square_or_fail, (i for i in items if i != 7), workers=2)) == [i * i for i in items if i != 7]
+
+
+def test_an_error_in_a_worker_is_raised_at_its_item():
+    results = ordered_map(_square_or_fail, range(10), workers=2)
+    assert [next(results) for _ in range(7)] == [i * i for i in range(7)]
+    with pytest.raises(ValueError, match="seven"):
+        next(results)
+
+
+def test_a_partial_is_sent_once_and_applied_to_arrays():
+    add = functools.partial(np.add, np.arange(3))
+    assert [a.tolist() for a in ordered_map(add, [np.ones(3), np.zeros(3)], workers=2)] == [[1, 2, 3], [0, 1, 2]]
+
+
+def test_default_workers_is_the_usable_cores():
+    assert 1 <= default_workers()
+
+
+def test_run_gives_the_same_bytes_with_one_two_and_three_workers(tmp_path):
+    # With three the overlay is drawn in worker processes too, not only encoded in one.
+    write_dish_clip(DishSpec(seeds=20, frames=12, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
+    for workers in ("1", "2", "3"):
+        assert main(["run", str(tmp_path / "clip" / "clip.mp4"), "--out", str(tmp_path / workers), "--workers", workers]) == 0
+    for name in ("detections.csv", "tracks.csv", "overlay.mp4"):
+        for workers in ("2", "3"):
+            assert (tmp_path / "1" / name).read_bytes() == (tmp_path / workers / name).read_bytes(), (name, workers)
+
+
+def test_workers_below_one_is_refused(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "out"), "--workers", "0"]) == 2
+    assert "--workers must be a whole number >= 1" in capsys.readouterr().err
