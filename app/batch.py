@@ -26,11 +26,9 @@ import numpy as np
 from seedtrack.data.atomic import atomic_path
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
-from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.lifecycle import LifecycleConfig
 
 from .errors import UsageError
-from .pipeline import DetectionSettings, run_pipeline
+from .pipeline import DetectionSettings, TrackingSettings, run_pipeline
 
 STATUSES = ("done", "failed", "skipped")
 BATCH_COLUMNS = ("input", "status", "frames", "tracks", "seconds", "error")
@@ -43,20 +41,12 @@ class RunOptions:
 
     Attributes
     ----------
-    settings : DetectionSettings
-    config : GOAConfig
-    lifecycle : LifecycleConfig or None
-        None for the fixed-count scheme.
-    min_length : int
-        Tracks spanning fewer frames are not written.
-    motion : {"auto", "smooth", "random"}
+    detection : DetectionSettings
+    tracking : TrackingSettings
     """
 
-    settings: DetectionSettings = DetectionSettings()
-    config: GOAConfig = GOAConfig()
-    lifecycle: LifecycleConfig | None = LifecycleConfig()
-    min_length: int = 0
-    motion: str = "auto"
+    detection: DetectionSettings = DetectionSettings()
+    tracking: TrackingSettings = TrackingSettings()
 
     def fingerprint(self) -> str:
         """A text that differs whenever the options differ (what a marker is checked against)."""
@@ -115,9 +105,9 @@ def clip_names(inputs: Sequence[Path]) -> list[str]:
 
 def absolute_options(options: RunOptions) -> RunOptions:
     """The options with a mask image's path made absolute, for workers in other folders."""
-    roi = options.settings.roi
+    roi = options.detection.roi
     if isinstance(roi, Path):
-        return dataclasses.replace(options, settings=dataclasses.replace(options.settings, roi=roi.absolute()))
+        return dataclasses.replace(options, detection=dataclasses.replace(options.detection, roi=roi.absolute()))
     return options
 
 
@@ -148,7 +138,7 @@ def run_clip(clip: str, shown: str, folder: str, marker: str, options: RunOption
         start = time.perf_counter()
         try:
             detections, tracks = run_pipeline(
-                Path(clip), Path(folder), options.settings, options.config, options.lifecycle, options.min_length, options.motion, workers=1
+                Path(clip), Path(folder), options.detection, options.tracking, workers=1
             )
         except Exception as error:  # noqa: BLE001 - any failure of one clip is that clip's result
             expected = isinstance(error, (DataError, UsageError))

@@ -17,7 +17,7 @@ from ..parallel import default_workers
 from ..progress import progress_bar
 from ..wording import counted
 from .detect import add_detection_options, detection_settings
-from .run import add_tracker_options, lifecycle_config, tracker_config, workers_count
+from .run import add_tracker_options, tracking_settings, workers_count
 
 
 # How long to keep trying to reach a scheduler named by --scheduler.
@@ -56,7 +56,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    options = RunOptions(detection_settings(args), tracker_config(args), lifecycle_config(args), args.min_length, args.motion)
+    options = RunOptions(detection_settings(args), tracking_settings(args))
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers sizes the local cluster; with --scheduler the cluster's own workers run the clips")
     clip_names(args.inputs)  # refuse clashing names before starting a cluster
