@@ -24,6 +24,7 @@ from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import MEASUREMENT_COLUMNS, BlobOptions, background_of, choose_polarity, detect_blobs, to_gray
 from seedtrack.detection.roi import Circle, circle_mask, dish_mask
 from seedtrack.detection.spots import detect_spots
+from seedtrack.tracking.adaptive import track_measured_motion
 from seedtrack.tracking.goa import GOAConfig, goa_updown, pass_steps
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
 from seedtrack.tracking.regime import choose_motion, fit_motion, track_without_drift
@@ -214,8 +215,11 @@ def track_with_motion(
     "smooth" or "random") and the choice said on one ``motion: ...`` line. Random motion with a
     common drift is tracked in a frame moving with the drift and returned in the image frame
     (:func:`seedtrack.tracking.regime.track_without_drift`). ``keep_model`` keeps ``config``'s individual
-    model (the user chose it).
+    model (the user chose it). "auto" with the model left to us measures the model on a first
+    pass instead (:func:`seedtrack.tracking.adaptive.track_measured_motion`).
     """
+    if motion == "auto" and not keep_model:
+        return track_measured_motion(frames, config, track, say)
     choice = choose_motion(frames, motion)
     fitted, drift = fit_motion(config, choice, keep_model)
     limit = "no speed limit" if fitted.d_max is None else f"speed limit {fitted.d_max:.2f} px/frame"

@@ -100,7 +100,9 @@ def first_links(
     if d_max is not None:
         valid &= speed <= d_max
     head, measurement = head[valid], measurement[valid]
-    scale = d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0)
+    # A model measured on the data brings its own speed scale, so that a speed limit only
+    # removes candidates and does not reweigh the rest (seedtrack.tracking.adaptive).
+    scale = getattr(link_model, "speed_scale", None) or (d_max if d_max is not None else max(speed[valid].max(initial=0), 1.0))
     # Without a lookahead an IM1 link model scores by its own cost (its power, 1 or 2); otherwise
     # the paper's linear IM1, the cost _NEAREST_SHARE was measured with.
     nearest_model = link_model if horizon < 3 and link_model.order == 1 else _LINEAR_IM1
