@@ -25,6 +25,7 @@ import numpy as np
 
 from .goa import GOAConfig
 from .persistence import MotionStatistics, PersistentModel, fit_statistics
+from .repair import resolve_crossings
 from .regime import MotionChoice, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks
 
@@ -80,7 +81,7 @@ def track_measured_motion(
     limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if config.d_max is not None else " (measured)")
     drift = statistics.drift
     say(f"motion: {choice.reason}; measured on a first pass: {statistics.describe()}, drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame; {limit}")
-    return track_without_drift(frames, drift, lambda moved: track(moved, fitted))
+    return resolve_crossings(track_without_drift(frames, drift, lambda moved: track(moved, fitted)), statistics)
 
 
 def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tuple[Tracks, MotionChoice]:
@@ -95,10 +96,14 @@ def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tup
 
 def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfig:
     """``config`` with the measured model (drift removed: the final pass runs in a frame moving
-    with it) and, when ``config`` has none, the measured speed limit about the drift."""
+    with it) and the speed limit about the drift: the measured one when ``config`` has none."""
     measured = max(SPEED_MARGIN * statistics.fastest, 1.0)
     model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=GATE, speed_scale=measured)
-    return replace(config, individual=model, d_max=measured if config.d_max is None else config.d_max)
+    if config.d_max is None:
+        return replace(config, individual=model, d_max=measured)
+    # The user's limit is on speeds in the image; about the drift a speed up to limit + |drift|
+    # can still be one, and only the faster ones are certainly impossible.
+    return replace(config, individual=model, d_max=config.d_max + float(np.hypot(*statistics.drift)))
 
 
 __all__ = ["track_measured_motion", "first_pass", "measured_config", "GATE", "SPEED_MARGIN"]
