@@ -51,8 +51,9 @@ def _tracks(table, id_column: str, first_frame: int) -> Tracks:
 
 
 def trackpy_linker(mode: str, memory: int = 0) -> Callable[[Sequence[np.ndarray], float, int], Tracks]:
-    """trackpy's ``link`` as a tracker: ``mode`` "plain", "adaptive" (adaptive search) or
-    "predict" (``NearestVelocityPredict``); a particle may vanish for ``memory`` frames."""
+    """trackpy's ``link`` as a tracker: ``mode`` "plain", "adaptive" (adaptive search),
+    "predict" (``NearestVelocityPredict``) or "predict-adaptive" (both); a particle may vanish
+    for ``memory`` frames."""
     def run(frames: Sequence[np.ndarray], max_speed: float, first_frame: int = 0) -> Tracks:
         import trackpy
 
@@ -73,6 +74,10 @@ def _trackpy_link(table, mode: str, max_speed: float, memory: int):
     try:
         if mode == "predict":
             return trackpy.predict.NearestVelocityPredict().link_df(table, max_speed, memory=memory)
+        if mode == "predict-adaptive":
+            return trackpy.predict.NearestVelocityPredict().link_df(
+                table, max_speed, memory=memory, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP
+            )
         if mode == "adaptive":
             return trackpy.link(
                 table, max_speed, memory=memory, adaptive_stop=ADAPTIVE_STOP_FRACTION * max_speed, adaptive_step=ADAPTIVE_STEP
@@ -195,6 +200,7 @@ PEERS: dict[str, Callable[[Sequence[np.ndarray], float, int], Tracks]] = {
     "trackpy": trackpy_linker("plain"),
     "trackpy-adaptive": trackpy_linker("adaptive"),
     "trackpy-predict": trackpy_linker("predict"),
+    "trackpy-predict-adaptive": trackpy_linker("predict-adaptive"),
     "laptrack": _laptrack,
 }
 if importlib.util.find_spec("stonesoup") is not None:
