@@ -225,7 +225,12 @@ class PersistentModel:
         known = ~np.isnan(previous[:, 0])
         about = np.where(known[:, None], previous - drift, 0.0)
         speed2 = np.einsum("ij,ij->i", about, about)
-        variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2)
+        # Across a gap of g frames the gap-normalised velocity of a random walk varies g times less
+        # (its steps average out), that of a velocity random walk (g + 1)(2g + 1) / 6g times more
+        # (its velocity errors add up); persistence weighs the two.
+        gap = candidates.gap.astype(float)
+        growth = (1.0 - s.persistence) / gap + s.persistence * (gap + 1.0) * (2.0 * gap + 1.0) / (6.0 * gap)
+        variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
         squared = np.full(known.shape, np.inf)
         for turn in {s.turn, -s.turn}:
             residual = candidates.velocity - drift - s.persistence * _turned(about, turn)
