@@ -67,11 +67,14 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
         return tracks
     for _ in range(_SWEEPS):
         changed = False
-        for k in range(1, n_frames - 1):
-            rows = np.flatnonzero(measured[:, k - 1] & measured[:, k] & measured[:, k + 1])
+        for k in range(n_frames):
+            # Three measured frames about k (at the clip's ends, the three next to it) give each
+            # track a velocity change to compare.
+            low = min(max(k - 1, 0), n_frames - 3)
+            rows = np.flatnonzero(measured[:, low : low + 3].all(axis=1))
             if rows.size < 2:
                 continue
-            speed = np.hypot(*(xy[rows, k] - xy[rows, k - 1] - statistics.drift).T)
+            speed = np.hypot(*(xy[rows, low + 1] - xy[rows, low] - statistics.drift).T)
             sigma = np.sqrt(statistics.noise**2 + (statistics.relative * speed) ** 2)
             pairs = cKDTree(xy[rows, k]).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")
             for a, b in pairs:
