@@ -110,3 +110,11 @@ def test_the_measured_speed_limit_keeps_absurd_links_out():
     links = tracks.present[:, 1:] & tracks.present[:, :-1]
     assert np.hypot(*np.diff(tracks.xy, axis=1)[links].T).max() <= 2 * fastest
     assert "(measured)" in said[0]
+
+
+@pytest.mark.parametrize("d_max", [None, 45, 60, 100, 200])
+def test_default_tracks_every_seed_of_the_default_dish_whatever_the_limit(d_max):
+    for seed in (1, 2):
+        scene = make_dish_scene(DishSpec(random_seed=seed))
+        tracks = track_measured_motion(scene.visible_points(), GOAConfig(d_max=d_max), _open)
+        assert score_tracks(tracks, scene.truth, 1e-6).correct_tracks == 80
