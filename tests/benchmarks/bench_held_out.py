@@ -11,7 +11,7 @@ one track follows the point over every frame it is measured) and IDF1 per tracke
 the clips; then, per clip, seedtrack's fastest link over the fastest true speed.
 
 Trackers: seedtrack as ``seedtrack track`` runs with no options; seedtrack given the speed
-limit the peers get; trackpy (plain and with ``NearestVelocityPredict``), laptrack (gap
+limit the peers get; the previous default, which chose smooth or random motion on a threshold; trackpy (plain and with ``NearestVelocityPredict``), laptrack (gap
 closing over 2 frames), our IPAN and the published GOA-updown (IM2, CM1, the paper's first
 links, no track restarts) at search range 2 v (v the mean speed) on the moving-point scenes
 and 1.1 times the rim speed on the dish (2 v there would put hundreds of seeds in one search
@@ -37,6 +37,7 @@ from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
 from seedtrack.pipeline import track_with_motion
+from seedtrack.tracking.adaptive import first_pass
 from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.goa import GOAConfig, goa_updown
 from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
@@ -132,9 +133,16 @@ def _trackpy(mode: str):
     return run
 
 
+def _switching(frames, limit, missed):
+    """The default before the motion was measured: smooth or random motion chosen on a threshold
+    (the first pass of today's default)."""
+    return first_pass(frames, GOAConfig(), lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()))[0]
+
+
 TRACKERS: dict[str, Callable] = {
     "seedtrack": _seedtrack(None),
     "seedtrack --max-speed": _seedtrack_limited,
+    "switching default": _switching,
     "trackpy": _trackpy("plain"),
     "trackpy predict": _trackpy("predict"),
     "laptrack": lambda frames, limit, missed: PEERS["laptrack"](frames, limit, 0),
