@@ -200,7 +200,6 @@ PEERS: dict[str, Callable[[Sequence[np.ndarray], float, int], Tracks]] = {
     "trackpy": trackpy_linker("plain"),
     "trackpy-adaptive": trackpy_linker("adaptive"),
     "trackpy-predict": trackpy_linker("predict"),
-    "trackpy-predict-adaptive": trackpy_linker("predict-adaptive"),
     "laptrack": _laptrack,
 }
 if importlib.util.find_spec("stonesoup") is not None:
