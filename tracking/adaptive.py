@@ -31,13 +31,11 @@ from .tracks import Tracks
 
 # The measured speed limit is this many times the fastest speed that fits the motion.
 SPEED_MARGIN = 2.0
-# Sigmas from the prediction at which a link costs as much as a slave. Measured on the tuning
-# seeds of tests/benchmarks/bench_held_out.py (3 clips a scene): real velocity changes have longer
-# tails than a Gaussian (speed steps along the track, turns across it), and a true link beyond
-# the gate leaves its point to a new track. PSMG-like 50 points at 12 px/frame, strict merit
-# 0.84 / 0.90 / 0.90 at gate 6 / 9 / 12; dish of 80 seeds 5% missed 0.72 / 0.88 / 0.97; but 15%
-# missed 0.15 / 0.15 / 0.10, insects with 5% missed 0.30 / 0.30 / 0.23, PSMG with entry/exit
-# 0.87 / 0.87 / 0.85.
+# Sigmas from the prediction at which a link costs as much as a slave, chosen on the tuning seeds
+# of tests/benchmarks/bench_held_out.py among 6, 9 and 12: real velocity changes have longer tails
+# than a Gaussian (speed steps along the track, turns across it), and a true link beyond the gate
+# leaves its point to a new track; 6 lost such links on fast smooth motion and on dishes with
+# seeds missed, 12 let wrong links in where seeds are missed often and points come and go.
 GATE = 9.0
 
 Track = Callable[[list[np.ndarray], GOAConfig], Tracks]
