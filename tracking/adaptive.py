@@ -89,7 +89,17 @@ def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tup
     """Tracks to measure the motion on, and how they were made: the smooth-motion default or,
     where the unambiguous links show a random walk, nearest neighbour about the drift, with no
     speed limit from the user (a given limit would reshape the costs of this pass; the final
-    pass applies it)."""
+    pass applies it).
+
+    Example
+    -------
+    >>> from seedtrack.data.psmg import PSMGSpec, generate_psmg
+    >>> from seedtrack.tracking.goa import goa_updown
+    >>> frames, _ = generate_psmg(PSMGSpec(trajectories=10, random_seed=2))
+    >>> tracks, choice = first_pass(frames, GOAConfig(), goa_updown)
+    >>> choice.individual_model, tracks.n_tracks
+    ('im2', 10)
+    """
     choice = choose_motion(frames, "auto")
     fitted, drift = fit_motion(replace(config, d_max=None), choice)
     return track_without_drift(frames, drift, lambda moved: track(moved, fitted)), choice
@@ -97,7 +107,15 @@ def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tup
 
 def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfig:
     """``config`` with the measured model (drift removed: the final pass runs in a frame moving
-    with it) and the speed limit about the drift: the measured one when ``config`` has none."""
+    with it) and the speed limit about the drift, pixels/frame: twice the fastest measured speed
+    when ``config`` has none, else the given one plus the drift's speed.
+
+    Example
+    -------
+    >>> stats = MotionStatistics(1.0, 0.3, 0.1, (3.0, 4.0), 2.0, 100, fastest=10.0)
+    >>> measured_config(GOAConfig(), stats).d_max, measured_config(GOAConfig(d_max=12.0), stats).d_max
+    (20.0, 17.0)
+    """
     measured = max(SPEED_MARGIN * statistics.fastest, 1.0)
     model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=GATE, speed_scale=measured)
     if config.d_max is None:

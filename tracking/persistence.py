@@ -101,11 +101,11 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
 
     Example
     -------
-    >>> import numpy as np
-    >>> xy = np.stack([np.column_stack((3.0 * np.arange(8), np.full(8, 10.0 * i))) for i in range(3)])
+    >>> t = np.arange(8.0)[:, None]
+    >>> xy = np.stack([3.0 * t * [np.cos(a), np.sin(a)] for a in (0.0, 2.0, 4.0)])
     >>> stats = fit_statistics(Tracks(xy, np.zeros((3, 8), np.int64)))
-    >>> round(stats.persistence, 2), stats.drift
-    (1.0, (3.0, 0.0))
+    >>> round(stats.persistence, 2), abs(round(stats.turn, 2))
+    (1.0, 0.0)
     """
     measured = tracks.present & (tracks.measurement != NO_MEASUREMENT)
     step = np.diff(tracks.xy, axis=1)
