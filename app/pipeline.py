@@ -316,6 +316,8 @@ class TrackingSettings:
         Keep ``config``'s individual model whatever the motion (the user chose it).
     min_length : int
         Tracks spanning fewer frames, gaps included, are dropped.
+    first_links : ndarray of int, shape (n, 2), optional
+        For "goa": the first two frames' correspondences given (the paper's protocol).
     """
 
     algorithm: str = "goa-updown"
@@ -324,6 +326,7 @@ class TrackingSettings:
     motion: str = "auto"
     keep_model: bool = False
     min_length: int = 0
+    first_links: np.ndarray | None = None
 
 
 def track_frames(
@@ -345,9 +348,18 @@ def track_frames(
     """
     if settings.algorithm not in GOA_FAMILY:
         return drop_short(run_tracker(settings.algorithm, frames, settings.config.d_max, first_frame), settings.min_length)
-    with progress_bar(pass_steps(settings.algorithm, len(frames)), "tracking", unit="step") as bar:
+    steps = pass_steps(settings.algorithm, len(frames), settings.motion, settings.keep_model)
+    with progress_bar(steps, "tracking", unit="step") as bar:
         tracks, fit = link_goa(
-            frames, settings.algorithm, settings.config, settings.lifecycle, settings.motion, settings.keep_model, first_frame, progress=bar.update
+            frames,
+            settings.algorithm,
+            settings.config,
+            settings.lifecycle,
+            settings.motion,
+            settings.keep_model,
+            first_frame,
+            progress=bar.update,
+            first_links=settings.first_links,
         )
     if say is not None:
         say(fit.summary)

@@ -260,3 +260,25 @@ def test_track_output_ending_in_a_slash_is_refused(tmp_path, capsys):
         main(["track", str(tmp_path / "points.csv"), "--out", f"{tmp_path}/result/"])
     assert exit_.value.code == 2 and "names a folder; give a file name" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]
+
+
+def test_goa_takes_its_first_links_from_a_tracks_file(tmp_path, capsys):
+    # The paper's protocol: GOA given the true correspondences of the first two frames.
+    from seedtrack.data.trackfile import write_tracks
+    from seedtrack.tracking.metrics import score_tracks
+
+    frames, truth = generate_psmg(PSMGSpec(trajectories=15, mean_speed=4.0, random_seed=3))
+    frame = np.concatenate([np.full(len(f), k) for k, f in enumerate(frames)])
+    xy = np.concatenate(frames)
+    write_table(tmp_path / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
+    write_tracks(tmp_path / "truth.csv", truth, np.arange(len(frames)))
+    out = tmp_path / "tracks.csv"
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(out), "--algorithm", "goa", "--first-links", str(tmp_path / "truth.csv")]) == 0
+    tracks = read_table(out)
+    result = Tracks.from_rows(tracks["track_id"], tracks["frame"], tracks["x"], tracks["y"], tracks["interpolated"])
+    assert score_tracks(result, truth, 0.5).correct_tracks == 15
+    # A first link that is no measured point is refused with the file's line.
+    write_table(tmp_path / "bad.csv", {"track_id": np.array([0]), "frame": np.array([0]), "x": np.array([-5.0]), "y": np.array([-5.0])})
+    capsys.readouterr()
+    code = main(["track", str(tmp_path / "points.csv"), "--out", str(out), "--algorithm", "goa", "--first-links", str(tmp_path / "bad.csv")])
+    assert code == 2 and "bad.csv: line 2: no point of frame 0" in capsys.readouterr().err

@@ -95,7 +95,9 @@ def first_links(
     velocity = frames[1][measurement] - frames[0][head]
     valid = limits.admits(velocity)
     head, measurement = head[valid], measurement[valid]
-    scale = limits.scale(velocity[valid])
+    # A model measured on the data brings its own speed scale, so that a speed limit only
+    # removes candidates and does not reweigh the rest (seedtrack.tracking.adaptive).
+    scale = getattr(link_model, "speed_scale", None) or limits.scale(velocity[valid])
     # Without a lookahead an IM1 link model scores by its own cost (its power, 1 or 2); otherwise
     # the paper's linear IM1, the cost _NEAREST_SHARE was measured with.
     nearest_model = link_model if horizon < 3 and link_model.order == 1 else _LINEAR_IM1

@@ -18,38 +18,11 @@ import numpy as np
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
-from .regime import MotionChoice, choose_motion, fit_motion, track_without_drift
+from .adaptive import track_measured_motion
+from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks, point_frames
 
 GOA_FAMILY = ("goa", "goa-updown", "goa-updown-fixed")
-
-
-@dataclass(frozen=True)
-class MotionFit:
-    """How the points move and the tracker configuration fitted to it.
-
-    Attributes
-    ----------
-    choice : MotionChoice
-        What :func:`seedtrack.tracking.regime.choose_motion` measured.
-    config : GOAConfig
-        The configuration asked for, fitted to the motion (see
-        :func:`seedtrack.tracking.regime.fit_motion`).
-    drift : tuple of float
-        Common step (x, y), pixels/frame, removed before tracking; (0, 0) for none.
-    """
-
-    choice: MotionChoice
-    config: GOAConfig
-    drift: tuple[float, float]
-
-    @property
-    def summary(self) -> str:
-        """One line for the user: what was measured and how it is tracked."""
-        limit = "no speed limit" if self.config.d_max is None else f"speed limit {self.config.d_max:.2f} px/frame"
-        if any(self.drift):
-            limit += f" about the drift ({self.drift[0]:.2f}, {self.drift[1]:.2f}) px/frame"
-        return f"motion: {self.choice.reason}; tracking with {self.config.individual.name.upper()}, {limit}"
 
 
 def fit_to_motion(frames: Sequence[np.ndarray], config: GOAConfig = GOAConfig(), motion: str = "auto", keep_model: bool = False) -> MotionFit:
@@ -87,6 +60,7 @@ def link_goa(
     keep_model: bool = False,
     first_frame: int = 0,
     progress: Progress | None = None,
+    first_links: np.ndarray | None = None,
 ) -> tuple[Tracks, MotionFit]:
     """Track points with a GOA tracker fitted to their motion.
 
@@ -109,6 +83,9 @@ def link_goa(
         0-based frame index of ``frames[0]``.
     progress : callable, optional
         Called with 1 after each step; :func:`pass_steps` calls in all.
+    first_links : ndarray of int, shape (n, 2), optional
+        For "goa": the first two frames' correspondences (indices into ``frames[0]`` and
+        ``frames[1]``, -1 for none), as the paper's protocol gives them, instead of choosing them.
 
     Returns
     -------
@@ -129,16 +106,20 @@ def link_goa(
     if algorithm not in GOA_FAMILY:
         raise ValueError(f"algorithm must be one of {', '.join(GOA_FAMILY)}, got {algorithm!r}")
     frames = point_frames(frames)
-    fit = fit_to_motion(frames, config, motion, keep_model)
 
-    def track(moved: list[np.ndarray]) -> Tracks:
+    def track(moved: list[np.ndarray], fitted: GOAConfig) -> Tracks:
         if algorithm == "goa":
-            return goa(moved, initial_links(moved, fit.config), fit.config, first_frame, progress=progress)
+            initial = first_links if first_links is not None else initial_links(moved, fitted)
+            return goa(moved, initial, fitted, first_frame, progress=progress)
         if algorithm == "goa-updown-fixed" or lifecycle is None:
-            return goa_updown(moved, fit.config, first_frame, progress=progress)
-        return goa_updown_open(moved, fit.config, lifecycle, first_frame, progress=progress)
+            return goa_updown(moved, fitted, first_frame, progress=progress)
+        return goa_updown_open(moved, fitted, lifecycle, first_frame, progress=progress)
 
-    tracks = track_without_drift(frames, fit.drift, track)
+    if motion == "auto" and not keep_model:
+        tracks, fit = track_measured_motion(frames, config, track)
+    else:
+        fit = fit_to_motion(frames, config, motion, keep_model)
+        tracks = track_without_drift(frames, fit.drift, lambda moved: track(moved, fit.config))
     return (_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
 
 
@@ -152,9 +133,11 @@ def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
     return replace(tracks, point_xy=xy)
 
 
-def pass_steps(algorithm: str, n_frames: int) -> int:
-    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames."""
-    return max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
+def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False) -> int:
+    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames (twice a pass's
+    when the motion is measured on a first pass)."""
+    steps = max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
+    return 2 * steps if motion == "auto" and not keep_model else steps
 
 
 __all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]

@@ -93,6 +93,40 @@ class MotionChoice:
     drift: tuple[float, float] = (0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class MotionFit:
+    """How the points move and the tracker configuration fitted to it.
+
+    Attributes
+    ----------
+    choice : MotionChoice
+        What :func:`seedtrack.tracking.regime.choose_motion` measured.
+    config : GOAConfig
+        The configuration asked for, fitted to the motion (see
+        :func:`seedtrack.tracking.regime.fit_motion`).
+    drift : tuple of float
+        Common step (x, y), pixels/frame, removed before tracking; (0, 0) for none.
+    measured : str or None
+        What a first pass measured of the motion (velocity persistence, turning, noise, drift)
+        and the speed limit, when the model was measured on one (:mod:`seedtrack.tracking.adaptive`).
+    """
+
+    choice: MotionChoice
+    config: GOAConfig
+    drift: tuple[float, float]
+    measured: str | None = None
+
+    @property
+    def summary(self) -> str:
+        """One line for the user: what was measured and how it is tracked."""
+        limit = "no speed limit" if self.config.d_max is None else f"speed limit {self.config.d_max:.2f} px/frame"
+        if self.measured is not None:
+            return f"motion: {self.choice.reason}; measured on a first pass: {self.measured}"
+        if any(self.drift):
+            limit += f" about the drift ({self.drift[0]:.2f}, {self.drift[1]:.2f}) px/frame"
+        return f"motion: {self.choice.reason}; tracking with {self.config.individual.name.upper()}, {limit}"
+
+
 class _Frame(NamedTuple):
     """One frame's positions with the search tree and spacing every link test needs."""
 

@@ -25,8 +25,9 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         metavar="PX",
-        help="largest speed in pixels/frame (d_max); with random motion, about the measured drift; default: no limit "
-        "for smooth motion, one estimated from the data for random motion",
+        help="largest speed in pixels/frame (d_max); it only removes faster links (about the measured drift, at "
+        "this plus the drift); default: twice the fastest speed measured on a first pass (--motion auto), no limit "
+        "with --motion smooth, one estimated from the data with --motion random",
     )
     group.add_argument(
         "--motion",
@@ -34,7 +35,8 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         default="auto",
         help="how the points move: smooth (keep their direction; smooth-motion model IM2), random (Brownian "
         "or jitter; nearest neighbour IM1 within a speed limit estimated from the data unless --max-speed), "
-        "or auto (default): measured from the steps that cannot be wrong, printed on the first line",
+        "or auto (default): velocity persistence, turning and noise measured on a first pass and used to score "
+        "every link, printed on the first line",
     )
     group.add_argument(
         "--phi-max",

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_table, write_table
+from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import GOA_FAMILY
 from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, CombinedModel, IndividualModel
@@ -55,22 +57,23 @@ goa-updown-fixed (or goa-updown --fixed-count) is GOA-updown as published: it in
 tracks forwards, then backwards from the forward pass's last links (and from last-frame points the
 forward pass lost, see --first-links), one track per point of the first frame. goa is the paper's
 single forward pass from given first links; here they are the links between the first two frames
-that --first-links chooses. Points no track takes are left out. nn, ss, rs and ipan are the paper's
+that --first-links chooses, or those of a tracks file given as --first-links FILE. Points no track takes are left out. nn, ss, rs and ipan are the paper's
 comparison trackers; they start and end tracks anywhere and take only --max-speed. --min-length
 applies to every algorithm.
 
 The GOA family first measures how the points move (--motion auto, the default; the first line of
-output says what it found): from the links no motion could make wrong (mutual nearest neighbours
-much closer than any other point), chained over three frames, it tells smooth motion (steps keep
-their direction and speed: seeds on a turning dish) from noisy or random motion (Brownian beads,
-jitter, flow with diffusion). Smooth motion is tracked with the smooth-motion model IM2 and, without
---max-speed, no speed limit: the smoothness limit --phi-max bounds a moving point and the first
-links are chosen among each point's nearest neighbours. Noisy or random motion is tracked by nearest
-neighbour (IM1 on squared distances, the likelihood of Gaussian steps) in a frame moving with the
-median step (the drift), within a speed limit of 5 sigma of the step noise about it, both estimated
-from those links, unless --max-speed or --individual-model says otherwise. When too few links are
-unambiguous to tell (fast or crowded scenes), smooth motion is assumed. --motion smooth or random
-skips the measurement.
+output says what it found). A first pass tracks them as before: from the links no motion could make
+wrong (mutual nearest neighbours much closer than any other point), chained over three frames, it
+tells smooth motion (IM2, no speed limit) from random motion (nearest neighbour about the median
+step). On its tracks it then measures how much of each velocity carries over to the next frame (0
+for a random walk, 1 for smooth motion), how far velocities turn (a turning dish), and how the
+noise grows with the speed, leaving out the links that fit worst; the final pass scores every link
+by its distance from the position those statistics predict, in sigmas, in a frame moving with the
+drift, within twice the fastest speed measured on the links that fit (or --max-speed, which only
+removes links: it does not change the cost of the others). Two tracks whose points pass too close
+to tell apart in one frame then take the pairing that the frames around it make most likely.
+--motion smooth or random, or --individual-model, skip the measurement and track as the first pass
+does.
 
 POINTS.csv must hold at least two frames; a file with only a header, a single frame, a missing
 column, or a value that is not a finite number is an error (exit 2, nothing written)."""
@@ -108,13 +111,15 @@ def add_parser(subparsers) -> None:
     group.add_argument("--min-speed", type=float, default=None, metavar="PX", help="smallest speed, pixels/frame (default 0)")
     group.add_argument(
         "--first-links",
-        choices=tuple(FIRST_LINKS),
         default=None,
+        metavar="{lookahead,nearest,paper} or FILE",
         help="how tracks start: lookahead (default) scores each first link by the smoothest path it starts "
         "over the next five frames, and GOA-updown's backward pass also starts tracks from last-frame points "
         "its forward pass lost; nearest takes the first links by optimal nearest-neighbour assignment, as the "
         "paper does; paper is nearest with the paper's backward pass, which starts only from the forward "
-        "pass's last links",
+        "pass's last links. With --algorithm goa, a FILE of tracks (track_id,frame,x,y, as tracks.csv) gives "
+        "the first links instead, as the paper's experiments gave them: each of its tracks in the first frame "
+        "(and the second, if it is there) must lie within 0.5 px of a point",
     )
     # phi_max left unset tells a GOA option given to another tracker from one left at its default.
     parser.set_defaults(run=run, phi_max=None, motion=None)
@@ -125,13 +130,53 @@ def read_points(path: Path) -> Points:
     return group_points(read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True), path)
 
 
+# A given first link's point must lie this close to a measured point, pixels.
+_GIVEN_TOLERANCE = 0.5
+
+
+def _first_links_file(args: argparse.Namespace) -> bool:
+    return args.first_links is not None and args.first_links not in FIRST_LINKS
+
+
+def given_first_links(path: Path, points: Points) -> np.ndarray:
+    """First links from a tracks file: per track with a point in the first frame, the index of
+    that point in ``points.frames[0]`` and of its point in the second frame (-1 if none).
+
+    Raises
+    ------
+    DataError
+        If the file cannot be read, or one of its first- or second-frame points is not within
+        0.5 px of a measured point, or two of its tracks claim one point.
+    """
+    from scipy.spatial import cKDTree
+
+    table = read_table(path, required=("track_id", "frame", "x", "y"), integer=("track_id", "frame"))
+    frames = (points.first_frame, points.first_frame + points.frame_step)
+    index = {}
+    for column, frame in enumerate(frames):
+        rows = np.flatnonzero(table["frame"] == frame)
+        xy = np.column_stack((table["x"][rows], table["y"][rows]))
+        distance, found = cKDTree(points.frames[column]).query(xy) if len(rows) else (np.empty(0), np.empty(0, int))
+        far = np.flatnonzero(distance > _GIVEN_TOLERANCE)
+        if far.size:
+            line = rows[far[0]] + 2
+            raise DataError(path, f"line {line}: no point of frame {frame} lies within {_GIVEN_TOLERANCE} px of ({xy[far[0], 0]:g}, {xy[far[0], 1]:g})")
+        if np.unique(found).size != found.size:
+            raise DataError(path, f"two tracks start on the same point of frame {frame}")
+        index[column] = dict(zip(table["track_id"][rows].tolist(), found.tolist()))
+    if not index[0]:
+        raise DataError(path, f"no track has a point in frame {frames[0]}, the first frame of the points")
+    ids = sorted(index[0])
+    return np.array([[index[0][i], index[1].get(i, -1)] for i in ids], dtype=np.int64)
+
+
 def goa_config(args: argparse.Namespace) -> GOAConfig:
     """The GOA configuration the options ask for (defaults for options not given)."""
     options = {
         "individual": IndividualModel(args.individual_model or "im2"),
         "combined": CombinedModel(args.combined_model or "cm1"),
         "d_max": args.max_speed,
-        **FIRST_LINKS[args.first_links or "lookahead"],
+        **FIRST_LINKS[args.first_links if args.first_links in FIRST_LINKS else "lookahead"],
     }
     if args.phi_max is not None:
         options["phi_max"] = args.phi_max
@@ -157,6 +202,12 @@ def check_options(args: argparse.Namespace) -> None:
         given = [option_name(name) for name in _GOA_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
+    if _first_links_file(args) and args.algorithm != "goa":
+        if args.first_links.startswith("-") or not Path(args.first_links).suffix:
+            raise UsageError(f"--first-links takes lookahead, nearest, paper or a tracks file, not {args.first_links!r}")
+        raise UsageError("--first-links FILE only applies to --algorithm goa (the single pass from given first links)")
+    if _first_links_file(args) and not Path(args.first_links).is_file():
+        raise UsageError(f"--first-links: {args.first_links}: no such file")
     if args.algorithm != "goa-updown":
         given = [option_name(name) for name in _OPEN_ONLY if getattr(args, name) is not None]
         if given:
@@ -166,7 +217,10 @@ def check_options(args: argparse.Namespace) -> None:
 
 def track_points(points: Points, args: argparse.Namespace, say=print) -> Tracks:
     """Run the tracker the options name on the points (see :func:`seedtrack.pipeline.track_frames`)."""
-    return track_frames(points.frames, tracking_settings(args, goa_config(args)), points.first_frame, say)
+    settings = tracking_settings(args, goa_config(args))
+    if _first_links_file(args):
+        settings = replace(settings, first_links=given_first_links(Path(args.first_links), points))
+    return track_frames(points.frames, settings, points.first_frame, say)
 
 
 def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:

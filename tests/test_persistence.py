@@ -1,0 +1,119 @@
+"""The measured motion model: statistics fitted on tracks, the link cost, encounters over five
+frames, and the default that tracks twice."""
+
+import numpy as np
+import pytest
+
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.held_out import HeldOutSpec, generate_held_out
+from seedtrack.data.psmg import PSMGSpec, generate_psmg
+from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.tracking.adaptive import track_measured_motion
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.metrics import score_tracks
+from seedtrack.tracking.motion import Candidates
+from seedtrack.tracking.persistence import MotionStatistics, PersistentModel, fit_statistics
+from seedtrack.tracking.repair import resolve_crossings
+from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
+
+
+def _open(frames, config):
+    return goa_updown_open(frames, config, LifecycleConfig())
+
+
+def test_statistics_of_smooth_motion_and_of_a_random_walk():
+    _, smooth = generate_held_out(HeldOutSpec(kind="smooth", points=60, speed=6.0, speed_step=0.1, turn_step=10.0, random_seed=3))
+    stats = fit_statistics(smooth)
+    # Speed steps of 0.6 px and turns of 10 degrees (1 px across at 6 px/frame): about 0.8 px per axis.
+    assert stats.persistence > 0.9 and abs(stats.turn) < 0.05
+    assert 0.4 < np.hypot(stats.noise, stats.relative * 6.0) < 1.3
+    _, walkers = generate_walkers(WalkerSpec(walkers=100, frames=10, sigma=1.5, random_seed=2))
+    walk = fit_statistics(walkers)
+    assert walk.persistence < 0.15 and walk.noise == pytest.approx(1.5, rel=0.1)
+
+
+def test_statistics_leave_out_wrong_links():
+    # Straight tracks in 30 directions at 4 px/frame, with 0.2 px of wobble; a tenth of them jump
+    # 40 px sideways once: the fit keeps the straight motion's noise.
+    t = np.arange(10.0)[:, None]
+    xy = np.stack([100.0 + 4.0 * t * [np.cos(0.2 * i), np.sin(0.2 * i)] + 0.2 * np.sin(3 * t + i) for i in range(30)])
+    clean = fit_statistics(Tracks.from_dense(xy.copy(), np.zeros((30, 10), np.int64)))
+    xy[::10, 5:, 1] += 40.0
+    stats = fit_statistics(Tracks.from_dense(xy, np.zeros((30, 10), np.int64)))
+    assert stats.persistence > 0.95 and stats.relative < 0.05
+    assert stats.noise == pytest.approx(clean.noise, rel=0.1) and stats.fastest < 5.0
+
+
+def test_a_dish_turns_its_velocities():
+    scene = make_dish_scene(DishSpec(seeds=40, frames=8, rim_speed=30.0, random_seed=1))
+    stats = fit_statistics(scene.truth)
+    # The dish's angular speed, radians/frame: rim speed over its radius (0.46 of the frame's height).
+    assert abs(stats.turn) == pytest.approx(30.0 / (0.46 * DishSpec.height), rel=0.1)
+    assert stats.relative < 0.02
+
+
+def test_cost_is_the_distance_from_the_prediction_in_gate_sigmas():
+    stats = MotionStatistics(1.0, 1.0, 0.0, (0.0, 0.0), 3.0, 100)
+    model = PersistentModel(stats, gate=2.0)
+    previous = np.array([[5.0, 0.0], [5.0, 0.0], [np.nan, np.nan]])
+    pairs = Candidates(np.arange(3), np.arange(3), np.array([[5.0, 2.0], [7.0, 0.0], [0.0, 3.0]]), np.ones(3, np.int64), previous)
+    cost = model.cost(pairs, 0.1, 50.0)
+    # 2 px from the prediction at sigma 1 = the gate: phi_max; a head with no velocity is scored
+    # against the drift with the velocity spread (sqrt(3^2 + 1^2)).
+    assert cost == pytest.approx([0.1, 0.1, 0.1 * 9.0 / (4.0 * 10.0)])
+    radius = model.gate_radius(np.array([5.0, 0.0]), np.array([True, False]), 0.1)
+    assert radius == pytest.approx([7.0, 2.0 * np.sqrt(10.0)])
+
+
+def test_a_swap_at_a_crossing_is_undone_by_the_frames_after_it():
+    t = np.arange(9.0)
+    a = np.column_stack((10 + 5 * t, 50 + 0.25 * (t - 4)))
+    b = np.column_stack((10 + 5 * t, 50 - 0.25 * (t - 4)))
+    truth = np.stack((a, b))
+    stats = MotionStatistics(1.0, 0.3, 0.0, (5.0, 0.0), 1.0, 100)
+    one_frame = truth.copy()
+    one_frame[:, 5] = truth[::-1, 5]
+    for wrong in (one_frame, np.concatenate((truth[:, :5], truth[::-1, 5:]), axis=1)):
+        fixed = resolve_crossings(Tracks.from_dense(wrong, np.zeros((2, 9), np.int64)), stats)
+        assert np.allclose(fixed.xy, truth)
+    # Points far apart are never exchanged, whatever their motion.
+    apart = truth + np.array([[[0.0, 0.0]], [[0.0, 30.0]]])
+    zigzag = apart.copy()
+    zigzag[0, 4, 1] += 3.0
+    assert np.array_equal(resolve_crossings(Tracks.from_dense(zigzag, np.zeros((2, 9), np.int64)), stats).xy, zigzag)
+
+
+def test_default_tracks_noisy_smooth_motion_better_than_the_smooth_model_alone():
+    frames, truth = generate_held_out(HeldOutSpec(kind="smooth", points=40, speed=10.0, random_seed=7))
+    smooth = score_tracks(_open(frames, GOAConfig()), truth, 0.5)
+    measured = score_tracks(track_measured_motion(frames, GOAConfig(), _open)[0], truth, 0.5)
+    assert measured.correct_tracks > smooth.correct_tracks and measured.link_error < 0.02
+
+
+def test_a_given_speed_limit_only_removes_links_on_a_dish():
+    scene = make_dish_scene(DishSpec(seeds=120, frames=8, random_seed=4))
+    frames = scene.visible_points()
+    free = score_tracks(track_measured_motion(frames, GOAConfig(), _open)[0], scene.truth, 0.5)
+    limited = score_tracks(track_measured_motion(frames, GOAConfig(d_max=1.1 * DishSpec.rim_speed), _open)[0], scene.truth, 0.5)
+    assert free.correct_tracks == limited.correct_tracks == 120
+
+
+def test_the_measured_speed_limit_keeps_absurd_links_out():
+    frames, truth = generate_psmg(
+        PSMGSpec(trajectories=40, mean_speed=4.0, speed_sigma=1.0, speed_step_sigma=0.3, angle_step_sigma=5.0, entry_exit=True, occlusion=0.1, random_seed=5)
+    )
+    tracks, fit = track_measured_motion(frames, GOAConfig(), _open)
+    measured = truth.present & (truth.measurement != NO_MEASUREMENT)
+    fastest = np.nanmax(np.hypot(*np.diff(truth.xy, axis=1)[measured[:, 1:] & measured[:, :-1]].T))
+    links = tracks.present[:, 1:] & tracks.present[:, :-1]
+    assert np.hypot(*np.diff(tracks.xy, axis=1)[links].T).max() <= 2 * fastest
+    assert "(measured)" in fit.summary
+
+
+@pytest.mark.parametrize("d_max", [None, 45, 60, 100, 200])
+def test_default_tracks_every_seed_of_the_default_dish_whatever_the_limit(d_max):
+    for seed in (1, 2):
+        scene = make_dish_scene(DishSpec(random_seed=seed))
+        tracks, _ = track_measured_motion(scene.visible_points(), GOAConfig(d_max=d_max), _open)
+        assert score_tracks(tracks, scene.truth, 1e-6).correct_tracks == 80

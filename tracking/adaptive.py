@@ -1,0 +1,127 @@
+"""The default motion model: measured on a first pass, then used to track (random to smooth).
+
+Instead of calling the motion smooth or random on a threshold and tracking with one of two
+fixed models, the default tracks twice. A first pass with the smooth-motion default (or the
+random-walk model, when the unambiguous links say the steps turn at random; see
+:func:`seedtrack.tracking.regime.choose_motion`) gives tracks, most of whose links are right
+whatever the motion. :func:`seedtrack.tracking.persistence.fit_statistics` measures on them how
+much of each velocity carries over, how it turns and how much noise there is, robustly to the
+first pass's wrong links; the final pass scores every link by its likelihood under those
+statistics (:class:`seedtrack.tracking.persistence.PersistentModel`), in a frame of reference
+moving with the drift. A persistence near 0 is a random walk tracked by distance about the
+drift, near 1 smooth motion tracked by distance from the predicted position, and everything in
+between is the blend the data show.
+
+The speed limit only removes links. Without one from the user, the final pass is limited to
+twice the fastest speed (99th percentile) on the first pass's chains that fit the statistics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .goa import GOAConfig
+from .persistence import MotionStatistics, PersistentModel, fit_statistics
+from .repair import resolve_crossings
+from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
+from .tracks import Tracks
+
+# The measured speed limit is this many times the fastest speed that fits the motion.
+SPEED_MARGIN = 2.0
+# Sigmas from the prediction at which a link costs as much as a slave, chosen on the tuning seeds
+# of tests/benchmarks/bench_held_out.py among 6, 9 and 12: real velocity changes have longer tails
+# than a Gaussian (speed steps along the track, turns across it), and a true link beyond the gate
+# leaves its point to a new track; 6 lost such links on fast smooth motion and on dishes with
+# seeds missed, 12 let wrong links in where seeds are missed often and points come and go.
+GATE = 9.0
+
+Track = Callable[[list[np.ndarray], GOAConfig], Tracks]
+
+
+def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track: Track) -> tuple[Tracks, MotionFit]:
+    """``track(frames, config)`` with the motion model measured on a first pass.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions (x, y) per frame, pixels.
+    config : GOAConfig
+        What the user set; its individual model is replaced by the measured one, and its
+        ``d_max`` (pixels/frame, None for none) only removes links in the final pass.
+    track : callable
+        ``track(frames, config) -> Tracks``, e.g. open GOA-updown; column k of its tracks must be
+        ``frames[k]``.
+
+    Returns
+    -------
+    tracks : Tracks
+    fit : MotionFit
+        The final pass's configuration and drift, and what was measured (``measured`` None when
+        the first pass had too few three-frame chains to measure on; its tracks are kept).
+
+    Example
+    -------
+    >>> from seedtrack.data.psmg import PSMGSpec, generate_psmg
+    >>> from seedtrack.tracking.goa import goa_updown
+    >>> frames, truth = generate_psmg(PSMGSpec(trajectories=10, random_seed=2))
+    >>> tracks, fit = track_measured_motion(frames, GOAConfig(), goa_updown)
+    >>> tracks.n_tracks
+    10
+    """
+    frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
+    first, first_fit = first_pass(frames, config, track)
+    statistics = fit_statistics(first)
+    if statistics is None:
+        return first, first_fit
+    fitted = measured_config(config, statistics)
+    drift = statistics.drift
+    limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if config.d_max is not None else " (measured)")
+    measured = f"{statistics.describe()}, drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame; {limit}"
+    fit = MotionFit(first_fit.choice, fitted, drift, measured)
+    return resolve_crossings(track_without_drift(frames, statistics.drift, lambda moved: track(moved, fitted)), statistics), fit
+
+
+def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tuple[Tracks, MotionFit]:
+    """Tracks to measure the motion on, and how they were made: the smooth-motion default or,
+    where the unambiguous links show a random walk, nearest neighbour about the drift, with no
+    speed limit from the user (a given limit would reshape the costs of this pass; the final
+    pass applies it).
+
+    Example
+    -------
+    >>> from seedtrack.data.psmg import PSMGSpec, generate_psmg
+    >>> from seedtrack.tracking.goa import goa_updown
+    >>> frames, _ = generate_psmg(PSMGSpec(trajectories=10, random_seed=2))
+    >>> tracks, fit = first_pass(frames, GOAConfig(), goa_updown)
+    >>> fit.choice.individual_model, tracks.n_tracks
+    ('im2', 10)
+    """
+    choice = choose_motion(frames, "auto")
+    fitted, drift = fit_motion(replace(config, d_max=None), choice)
+    return track_without_drift(frames, drift, lambda moved: track(moved, fitted)), MotionFit(choice, fitted, drift)
+
+
+def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfig:
+    """``config`` with the measured model (drift removed: the final pass runs in a frame moving
+    with it) and the speed limit about the drift, pixels/frame: twice the fastest measured speed
+    when ``config`` has none, else the given one plus the drift's speed.
+
+    Example
+    -------
+    >>> stats = MotionStatistics(1.0, 0.3, 0.1, (3.0, 4.0), 2.0, 100, fastest=10.0)
+    >>> measured_config(GOAConfig(), stats).d_max, measured_config(GOAConfig(d_max=12.0), stats).d_max
+    (20.0, 17.0)
+    """
+    measured = max(SPEED_MARGIN * statistics.fastest, 1.0)
+    model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=GATE, speed_scale=measured)
+    if config.d_max is None:
+        return replace(config, individual=model, d_max=measured)
+    # The user's limit is on speeds in the image; about the drift a speed up to limit + |drift|
+    # can still be one, and only the faster ones are certainly impossible.
+    return replace(config, individual=model, d_max=config.d_max + float(np.hypot(*statistics.drift)))
+
+
+__all__ = ["track_measured_motion", "first_pass", "measured_config", "GATE", "SPEED_MARGIN"]

@@ -1,0 +1,260 @@
+"""A motion model for the whole range from random walks to smooth motion, fitted to the data.
+
+Each point's next velocity is taken to be ``persistence`` times its last one (0 for a random
+walk, 1 for motion that keeps its velocity) plus Gaussian noise whose variance per axis grows
+with the speed: ``noise**2 + (relative * speed)**2`` (a random walk has only the first term;
+speed and direction steps of PSMG-like motion are proportional to the speed, the second). A
+candidate link costs its squared Mahalanobis distance from that prediction, scaled so that
+``gate`` sigmas cost phi_max: one optimal assignment of such costs is the most likely set of
+links (global nearest neighbour, as a Kalman tracker with a known model would make them).
+
+The parameters are measured, not set: :func:`fit_statistics` regresses each link's velocity on
+the velocity before it, over the tracks of a first pass, leaving out the links that fit worst
+(the wrong links a first pass makes). A head with no velocity yet is scored against the drift
+with the spread of all measured velocities.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .motion import Candidates
+from .tracks import NO_MEASUREMENT, Tracks
+
+# Sigmas from the prediction at which a link costs phi_max (the weight of a slave). Under a 2-D
+# Gaussian, a true link falls beyond 3.5 sigma with probability exp(-3.5**2 / 2) = 0.2%.
+GATE = 3.5
+# Links whose squared change exceeds this many times its variance (per axis, halved: an
+# exponential variable of mean 1 for Gaussian noise; 4.5 is 3 sigma) are left out of the fit as
+# a first pass's wrong links; the variance of those kept is divided by the share of an
+# exponential's mean that lies below the cut, so that clean Gaussian noise is not underestimated.
+_CUT = 4.5
+_KEPT_MEAN = (1.0 - (1.0 + _CUT) * np.exp(-_CUT)) / (1.0 - np.exp(-_CUT))
+_ROUNDS = 5
+# Noise is never taken below this, pixels/frame per axis (positions are rarely better).
+_MIN_NOISE = 0.1
+# Least triplets (three consecutive measured points on one track) that a fit needs.
+_MIN_TRIPLETS = 10
+_FASTEST = 0.99
+
+
+@dataclass(frozen=True)
+class MotionStatistics:
+    """How velocity carries over from frame to frame, measured on tracks.
+
+    Attributes
+    ----------
+    persistence : float
+        Share of a point's last velocity kept into the next frame (0 random walk, 1 smooth).
+    noise : float
+        Per-axis standard deviation of the velocity change at speed 0, pixels/frame.
+    relative : float
+        Per-axis standard deviation of the velocity change per pixel/frame of speed.
+    drift : tuple of float
+        Mean velocity (x, y), pixels/frame.
+    spread : float
+        Per-axis standard deviation of the velocities about the drift, pixels/frame (scores
+        the first link of a head that has no velocity yet).
+    triplets : int
+        Three-frame chains the fit used.
+    turn : float
+        Angle by which a velocity turns from one frame to the next, radians (a turning dish:
+        its angular speed; 0 when turns are at random).
+    fastest : float
+        99th percentile of the speeds about the drift on the chains that fit the model,
+        pixels/frame (wrong links seldom chain smoothly, so this is the true motion's).
+    """
+
+    persistence: float
+    noise: float
+    relative: float
+    drift: tuple[float, float]
+    spread: float
+    triplets: int
+    turn: float = 0.0
+    fastest: float = 0.0
+
+    def describe(self) -> str:
+        """One line for the user."""
+        # With little velocity kept, its turning is noise and says nothing.
+        turning = f", turning {np.degrees(self.turn):.1f} deg/frame" if self.persistence >= 0.1 else ""
+        return (
+            f"velocity persistence {self.persistence:.2f} (0 random walk, 1 smooth){turning}, noise {self.noise:.2f} px/frame + {self.relative:.2f} x speed "
+            f"(per axis, {self.triplets} chains)"
+        )
+
+
+def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
+    """Fit :class:`MotionStatistics` to the measured links of ``tracks``.
+
+    Parameters
+    ----------
+    tracks : Tracks
+        A first pass's tracks; only consecutive measured points count (no interpolated ones).
+
+    Returns
+    -------
+    MotionStatistics or None
+        None when the tracks hold fewer than 10 three-frame chains.
+
+    Example
+    -------
+    >>> t = np.arange(8.0)[:, None]
+    >>> xy = np.stack([3.0 * t * [np.cos(a), np.sin(a)] for a in (0.0, 2.0, 4.0)])
+    >>> stats = fit_statistics(Tracks.from_dense(xy, np.zeros((3, 8), np.int64)))
+    >>> round(stats.persistence, 2), abs(round(stats.turn, 2))
+    (1.0, 0.0)
+    """
+    measured = tracks.present & (tracks.measurement != NO_MEASUREMENT)
+    step = np.diff(tracks.xy, axis=1)
+    linked = measured[:, 1:] & measured[:, :-1]
+    before, after = step[:, :-1][linked[:, :-1] & linked[:, 1:]], step[:, 1:][linked[:, :-1] & linked[:, 1:]]
+    if before.shape[0] < _MIN_TRIPLETS:
+        return None
+    velocities = step[linked]
+    drift = np.median(velocities, axis=0)
+    b_all, a_all = before - drift, after - drift
+    speed2 = np.einsum("ij,ij->i", b_all, b_all)
+    # First round: links whose change is within the cut of the median change (as if the noise
+    # did not depend on the speed), so a first pass's wrong links cannot steer the start.
+    keep = np.ones(before.shape[0], bool)
+    variance = None
+    for round_ in range(_ROUNDS):
+        # Persistence and turning about the drift (the similarity transform that best maps each
+        # velocity to the next: a rigid turn, as of a dish, is kept), then the variance model by
+        # least squares on the squared change.
+        b, a = b_all[keep], a_all[keep]
+        if variance is None:
+            # At the start, the median over chains of each one's own transform: where a first
+            # pass links wrongly as often as rightly, a least-squares start would be the wrong
+            # links' (a dish 15% missed: persistence 0.8 and noise 0.4 x speed against 1.0 and 0.01).
+            moving = speed2 > 0
+            along = float(np.median(np.einsum("ij,ij->i", b[moving], a[moving]) / speed2[moving])) if moving.any() else 0.0
+            across = float(np.median((b[moving, 0] * a[moving, 1] - b[moving, 1] * a[moving, 0]) / speed2[moving])) if moving.any() else 0.0
+        else:
+            norm = max(float(np.einsum("ij,ij->", b, b)), 1e-12)
+            along = float(np.einsum("ij,ij->", b, a)) / norm
+            across = float(np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0])) / norm
+        persistence, turn = min(float(np.hypot(along, across)), 1.0), float(np.arctan2(across, along))
+        if along <= 0:
+            persistence, turn = 0.0, 0.0
+        change = a_all - persistence * _turned(b_all, turn)
+        squared = np.einsum("ij,ij->i", change, change) / 2.0
+        if variance is None:
+            variance = np.full(squared.shape, max(float(np.median(squared)) / np.log(2.0), _MIN_NOISE**2))
+        else:
+            noise2, relative2 = _non_negative_fit(speed2[keep], squared[keep])
+            noise2, relative2 = noise2 / _KEPT_MEAN, relative2 / _KEPT_MEAN
+            variance = np.maximum(noise2 + relative2 * speed2, _MIN_NOISE**2)
+        keep = squared / variance <= _CUT
+        if keep.sum() < _MIN_TRIPLETS:
+            keep = squared <= np.quantile(squared, 0.5)
+    # Robust to a first pass's absurd links: the median squared speed about the drift, per axis
+    # (an exponential variable's median is ln 2 of its mean for Gaussian velocities).
+    about = np.einsum("ij,ij->i", velocities - drift, velocities - drift)
+    spread = float(np.sqrt(np.median(about) / (2.0 * np.log(2.0))))
+    fastest = float(np.quantile(np.sqrt(speed2[keep]), _FASTEST)) if keep.any() else 0.0
+    return MotionStatistics(
+        persistence,
+        max(float(np.sqrt(noise2)), _MIN_NOISE),
+        float(np.sqrt(relative2)),
+        (float(drift[0]), float(drift[1])),
+        max(spread, _MIN_NOISE),
+        int(before.shape[0]),
+        turn,
+        fastest,
+    )
+
+
+def _turned(v: np.ndarray, angle: float) -> np.ndarray:
+    """Vectors (N, 2) turned by ``angle`` radians (x right, y down: clockwise on screen)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.column_stack((c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]))
+
+
+def _non_negative_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Least-squares c0, c1 >= 0 of y = c0 + c1 x."""
+    design = np.column_stack((np.ones_like(x), x))
+    c0, c1 = np.linalg.lstsq(design, y, rcond=None)[0]
+    if c1 < 0:
+        return float(max(np.mean(y), 0.0)), 0.0
+    if c0 < 0:
+        return 0.0, float(max(np.dot(x, y) / max(np.dot(x, x), 1e-12), 0.0))
+    return float(c0), float(c1)
+
+
+@dataclass(frozen=True)
+class PersistentModel:
+    """The individual model of :class:`MotionStatistics`: cost of a link from its prediction.
+
+    Used wherever GOA takes an individual model (``GOAConfig.individual``). Three-frame first
+    links are still scored by IM2's direction and speed (``w1``, ``w2``), which suits a first
+    link whatever the scale of the motion.
+
+    Attributes
+    ----------
+    statistics : MotionStatistics
+    gate : float
+        Sigmas at which a link costs phi_max.
+    w1, w2 : float
+        IM2 weights used to score first links over three frames.
+    speed_scale : float or None
+        Speed that costs phi_max in the nearest-neighbour share of a first link's score,
+        pixels/frame; None for the speed limit (or the farthest candidate), as for IM2.
+    """
+
+    statistics: MotionStatistics
+    gate: float = GATE
+    w1: float = 0.1
+    w2: float = 0.9
+    speed_scale: float | None = None
+    name: str = "persistent"
+    order: int = 2
+
+    def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
+        """``phi_max`` times the squared distance of each candidate velocity from its prediction
+        in units of ``gate`` sigmas (d_max is not used: a speed limit only removes links).
+
+        A pass does not say which way it runs in time, and backwards a velocity turns the other
+        way: the prediction turned either way that fits better is taken.
+
+        Example
+        -------
+        >>> stats = MotionStatistics(1.0, 0.5, 0.0, (0.0, 0.0), 2.0, 100)
+        >>> pairs = Candidates(np.array([0]), np.array([0]), np.array([[3.0, 0.5]]), np.array([1]), np.array([[3.0, 0.0]]))
+        >>> float(PersistentModel(stats, gate=1.0).cost(pairs, 0.1, 10.0)[0])
+        0.1
+        """
+        s = self.statistics
+        drift = np.asarray(s.drift)
+        previous = candidates.previous_velocity
+        known = ~np.isnan(previous[:, 0])
+        about = np.where(known[:, None], previous - drift, 0.0)
+        speed2 = np.einsum("ij,ij->i", about, about)
+        # Across a gap of g frames the gap-normalised velocity of a random walk varies g times less
+        # (its steps average out), that of a velocity random walk (g + 1)(2g + 1) / 6g times more
+        # (its velocity errors add up); persistence weighs the two.
+        gap = candidates.gap.astype(float)
+        growth = (1.0 - s.persistence) / gap + s.persistence * (gap + 1.0) * (2.0 * gap + 1.0) / (6.0 * gap)
+        variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
+        squared = np.full(known.shape, np.inf)
+        for turn in {s.turn, -s.turn}:
+            residual = candidates.velocity - drift - s.persistence * _turned(about, turn)
+            squared = np.minimum(squared, np.einsum("ij,ij->i", residual, residual))
+        return phi_max * squared / (self.gate**2 * variance)
+
+    def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
+        """Per-head speed beyond which no candidate can cost under phi_max, pixels/frame."""
+        s = self.statistics
+        drift = float(np.hypot(*s.drift))
+        # |v| <= |prediction| + gate sigma, with the prediction and speed taken about the drift
+        # at their largest (speed + drift) so the bound holds whatever the direction.
+        about = speed + drift
+        moving = drift + s.persistence * about + self.gate * np.sqrt(s.noise**2 + s.relative**2 * about**2)
+        still = drift + self.gate * np.sqrt(s.spread**2 + s.noise**2)
+        return np.where(has_history, moving, still) * (1 + 1e-9) + 1e-9
+
+
+__all__ = ["MotionStatistics", "PersistentModel", "fit_statistics"]
