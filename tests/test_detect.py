@@ -18,7 +18,7 @@ SPEC = DishSpec(seeds=30, frames=4, width=320, height=240, rim_speed=15.0, rando
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 @pytest.fixture(scope="module")

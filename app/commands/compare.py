@@ -23,7 +23,6 @@ DEFAULT_TOLERANCE = 3.0
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "compare",
-        help="draw two track sets over the clip, where they disagree in a warning colour",
         description="Draw track sets A and B (truth and result, or two trackers; any track format) over INPUT, side by "
         "side or overlaid. Points of the two sets are matched frame by frame within --tol; a link of one set "
         "(a point to the same track's next point) disagrees with the other set when its two points are not matched to one and the same "

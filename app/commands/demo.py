@@ -19,7 +19,6 @@ def add_parser(subparsers) -> None:
     defaults = DishSpec()
     parser = subparsers.add_parser(
         "demo",
-        help="generate a rotating-dish clip, track it and score the tracks against the truth",
         description="Generate a synthetic rotating-dish clip with known truth (DIR/clip.mp4, DIR/truth.csv), "
         "run the same pipeline as 'seedtrack run' on it, and print the track error.",
     )

@@ -183,7 +183,6 @@ def draw_preview(frame: np.ndarray, columns: dict[str, np.ndarray], roi: np.ndar
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "detect",
-        help="measure objects in every frame (detections.csv), with a preview image to tune the options",
         description="Find objects in every frame of INPUT and write OUT (CSV: frame,x,y,area,mean_intensity,"
         "eccentricity; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates). "
         "--preview draws what was found and the region of interest on one frame.",

@@ -46,7 +46,6 @@ def add_view_options(parser: argparse.ArgumentParser, out_required: bool) -> Non
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "render",
-        help="draw tracks over the clip: an MP4, a GIF, a PNG or a folder of PNGs",
         description="Draw each track over INPUT in its own colour (the same on every run): a fading trail, the id "
         "beside the head, interpolated positions hollow, starts and ends marked, detections that no track holds "
         "crossed out (with --detections), a legend and the frame number.",

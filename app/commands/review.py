@@ -21,7 +21,6 @@ DEFAULT_EVERY = 5
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "review",
-        help="draw track ids on frames, to write corrections from",
         description="Write DIR/review_FFFFFF.png for every Nth frame of INPUT (and the last frame of the tracks): "
         "the frame enlarged, each track's position, recent path and id in large print.",
     )

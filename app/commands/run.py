@@ -119,7 +119,6 @@ def lifecycle_config(args: argparse.Namespace) -> LifecycleConfig | None:
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run",
-        help="detect, track and draw a clip",
         description="Detect blobs in every frame of INPUT, link them into tracks with GOA-updown (tracks open "
         "and end anywhere in the clip unless --fixed-count), and write DIR/detections.csv, DIR/tracks.csv and "
         "DIR/overlay.mp4.",

@@ -32,7 +32,6 @@ _FLOAT_OPTIONS = {
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "synth",
-        help="generate synthetic points with ground truth",
         description="Generate synthetic data with known truth, to test trackers on.",
     )
     kinds = parser.add_subparsers(dest="kind", required=True, metavar="KIND")

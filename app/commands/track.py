@@ -84,7 +84,6 @@ column, or a value that is not a finite number is an error (exit 2, nothing writ
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "track",
-        help="link measured points (frame,x,y) into tracks",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
