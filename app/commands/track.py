@@ -159,15 +159,13 @@ def read_points(path: Path) -> Points:
     Raises
     ------
     DataError
-        If a column is missing or not numeric, a frame is negative, or fewer than two frames hold points.
+        If a column is missing or a value not a number in range (see :mod:`seedtrack.data.numbers`), or
+        fewer than two frames hold points.
     """
     table = read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True)
     frame, x, y = (table[name] for name in POINT_COLUMNS)
     if frame.size == 0:
         raise DataError(path, "no points (only a header); tracking needs points in at least two frames")
-    if frame.min() < 0:
-        bad = int(np.argmax(frame < 0))
-        raise DataError(path, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
     present = np.unique(frame)
     if present.size < 2:
         raise DataError(path, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
