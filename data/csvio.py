@@ -19,6 +19,7 @@ import pandas as pd
 
 from .atomic import atomic_path
 from .errors import DataError
+from .formats import CSV_FORMATS, EXTENSIONS, described
 from .numbers import check_range
 
 DETECTION_COLUMNS = ("frame", "x", "y", "area")
@@ -54,9 +55,26 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
     lengths = {len(values) for values in columns.values()}
     if len(lengths) > 1:
         raise ValueError(f"columns differ in length: {sorted(lengths)}")
+    check_table_name(path)
     table = pd.DataFrame({name: _for_writing(np.asarray(values)) for name, values in columns.items()})
     with atomic_path(path) as temporary:
         table.to_csv(temporary, index=False, float_format=_FLOAT_FORMAT, na_rep="", lineterminator="\n", encoding="utf-8")
+
+
+def check_table_name(path: str | os.PathLike) -> Path:
+    """Refuse a CSV table named with an extension that :data:`~seedtrack.data.formats.EXTENSIONS`
+    gives to another format (``points.txt`` would be MOTChallenge text to every other command).
+
+    Raises
+    ------
+    DataError
+        Naming the extension and what it means.
+    """
+    path = Path(path)
+    names = EXTENSIONS.get(path.suffix.lower())
+    if names is not None and not set(names) & set(CSV_FORMATS):
+        raise DataError(path, f"{path.suffix} names {' or '.join(names)} files, not a CSV table; name it .csv (extensions: {described()})")
+    return path
 
 
 def _for_writing(values: np.ndarray) -> np.ndarray:
@@ -125,7 +143,7 @@ def read_table(
     >>> read_table(points, required=("frame", "x", "y"))["x"]
     array([1.5, 2.5])
     """
-    path = Path(path)
+    path = check_table_name(path)
     if path.is_dir():
         raise DataError(path, "is a folder; give a CSV file")
     if not path.is_file():

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from seedtrack.data.atomic import atomic_path, check_target
-from seedtrack.data.csvio import write_table
+from seedtrack.data.csvio import check_table_name, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import IMAGE_SUFFIXES
 from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
@@ -205,6 +205,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.preview_frame is not None:
         raise UsageError("--preview-frame needs --preview PNG")
     # Found out now rather than after a long clip has been read.
+    check_table_name(args.out)
     for target in (args.out, args.preview):
         if target is not None:
             check_target(target)

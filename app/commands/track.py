@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import TRACK_COLUMNS, read_table, write_table
+from seedtrack.data.csvio import TRACK_COLUMNS, read_table
+from seedtrack.data.trackfile import output_format, write_rows
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig, goa, initial_links
 from seedtrack.tracking.lifecycle import drop_short
@@ -88,7 +89,7 @@ def add_parser(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks (CSV)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge) or .xml (TrackMate)")
     parser.add_argument(
         "--algorithm",
         choices=("goa", *TRACKERS),
@@ -255,11 +256,13 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
 
 def run(args: argparse.Namespace) -> int:
     _check_options(args)
-    check_target(args.out)  # now rather than after a long tracking run
+    # Now rather than after a long tracking run.
+    check_target(args.out)
+    output_format(args.out)
     points = read_points(args.points)
     tracks = track_points(points, args)
     rows = track_rows(points, tracks)
-    write_table(args.out, rows)
+    write_rows(args.out, rows)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
     print(
         f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "

@@ -20,5 +20,6 @@ def read(path) -> Rows:
 
 
 def write(path, rows: dict[str, np.ndarray]) -> None:
-    """Write the columns of :meth:`Tracks.to_rows` as ``tracks.csv``, atomically."""
-    write_table(path, {name: rows[name] for name in TRACK_COLUMNS})
+    """Write the columns of :meth:`Tracks.to_rows`, then any further columns of ``rows``, as
+    ``tracks.csv``, atomically."""
+    write_table(path, {**{name: rows[name] for name in TRACK_COLUMNS}, **rows})
