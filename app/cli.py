@@ -7,7 +7,8 @@ than after numpy, scipy, OpenCV and PyAV have loaded.
 
 :func:`main` is the one boundary where failures become what a user sees: an error a user can fix
 (bad input, bad options, a file that cannot be read or written, a full disk) is one line on stderr
-naming the file and the cause, exit status 2; Ctrl-C at any moment, start-up included, is one line
+naming the file and the cause, exit status 2; a warning (a :class:`DataWarning` from the library:
+input it can use but a user should hear about) is one line and the work goes on; Ctrl-C at any moment, start-up included, is one line
 and exit status 130.
 """
 
@@ -17,9 +18,10 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 from typing import Sequence
 
-from seedtrack.data.errors import DataError
+from seedtrack.data.errors import DataError, DataWarning
 
 from .errors import UsageError
 
@@ -104,8 +106,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = command if command in COMMANDS else None
     prefix = f"seedtrack {command}" if command else "seedtrack"
     try:
-        args = build_parser(command).parse_args(argv)
-        return args.run(args)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", DataWarning)
+            warnings.showwarning = lambda message, *_, **__: print(f"{prefix}: warning: {' '.join(str(message).splitlines())}", file=sys.stderr)
+            args = build_parser(command).parse_args(argv)
+            return args.run(args)
     except (DataError, UsageError) as error:
         return _fail(prefix, str(error))
     except KeyboardInterrupt:

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from .atomic import atomic_path
-from .errors import DataError
+from .errors import DataError, warn
 from .formats import CSV_FORMATS, EXTENSIONS, described
 from .numbers import check_range
 
@@ -238,3 +238,54 @@ def data_lines(path: Path, rows: np.ndarray | None = None) -> np.ndarray:
     reads the file again."""
     lines = np.array([number for number, line in text_lines(path) if line.strip()][1:], dtype=np.int64)
     return lines if rows is None else lines[rows]
+
+
+def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[str, np.ndarray]:
+    """Read a table of measured points (columns frame, x, y and any others), each point once.
+
+    A row that repeats an earlier row's frame, x and y is the same measurement twice (a file
+    joined with itself, a detection written twice): it is dropped, with a warning naming the
+    first such line, so that no tracker sees two objects in one place.
+
+    Parameters
+    ----------
+    path : path-like
+    others_as_text : bool
+        As in :func:`read_table`.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns, in file order, without the repeated rows.
+
+    Raises
+    ------
+    DataError
+        As :func:`read_table`, for a missing column or a value that is not a number in range.
+
+    Example
+    -------
+    >>> import tempfile, pathlib, warnings
+    >>> points = pathlib.Path(tempfile.mkdtemp()) / "points.csv"
+    >>> _ = points.write_text("frame,x,y\\n0,1,2\\n0,1,2\\n1,2,2\\n")
+    >>> with warnings.catch_warnings(record=True):
+    ...     read_points(points)["x"]
+    array([1., 2.])
+    """
+    table = read_table(path, required=("frame", "x", "y"), integer=("frame",), others_as_text=others_as_text)
+    frame, x, y = table["frame"], table["x"], table["y"]
+    order = np.lexsort((np.arange(frame.size), y, x, frame))
+    same = (np.diff(frame[order]) == 0) & (np.diff(x[order]) == 0) & (np.diff(y[order]) == 0)
+    if not same.any():
+        return table
+    # Equal rows sit together in that order, earliest first: it is kept, the others repeat it.
+    starts = np.concatenate(([True], ~same))
+    earliest = order[starts][np.cumsum(starts) - 1]
+    repeats = order[~starts]
+    first = int(np.argmin(repeats))
+    earlier, first = int(earliest[~starts][first]), int(repeats[first])
+    lines = data_lines(Path(path), np.array([earlier, first]))
+    warn(path, f"{repeats.size} row(s) repeat an earlier row's frame, x and y (first line {lines[1]}, as line {lines[0]}); each point is read once")
+    keep = np.ones(frame.size, bool)
+    keep[repeats] = False
+    return {name: values[keep] for name, values in table.items()}

@@ -13,3 +13,14 @@ class DataError(Exception):
     def not_utf8(cls, path, error: UnicodeDecodeError) -> "DataError":
         """The error for a text file in another encoding (Excel's plain "CSV" is cp1252)."""
         return cls(path, f"is not UTF-8 text (byte {error.start} of the file); save it as UTF-8 ('CSV UTF-8' in Excel)")
+
+
+class DataWarning(UserWarning):
+    """Input the program can use but that a user should hear about (the command prints it as one line)."""
+
+
+def warn(path, problem: str) -> None:
+    """Tell the user about ``path`` without stopping: a :class:`DataWarning` naming the file."""
+    import warnings
+
+    warnings.warn(DataWarning(f"{path}: {problem}"), stacklevel=2)

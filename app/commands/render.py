@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import read_table
+from seedtrack.data.csvio import read_points
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames
 from seedtrack.data.trackfile import FORMATS, read_tracks
@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     if args.summary is not None and args.summary.suffix.lower() != ".png":
         raise UsageError(f"--summary must be a .png file, got {args.summary}")
     tracks = read_tracks(args.tracks, args.format)
-    detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
+    detections = read_points(args.detections) if args.detections is not None else None
     with open_range(args, kind, [(args.tracks, tracks)]) as source:
         view = View.of(source.size, args.crop, args.scale)
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)

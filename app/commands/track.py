@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import TRACK_COLUMNS, read_table
+from seedtrack.data.csvio import TRACK_COLUMNS
+from seedtrack.data.csvio import read_points as read_points_table
 from seedtrack.data.trackfile import output_format, write_rows
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig, goa, initial_links
@@ -163,7 +164,7 @@ def read_points(path: Path) -> Points:
         If a column is missing or a value not a number in range (see :mod:`seedtrack.data.numbers`), or
         fewer than two frames hold points.
     """
-    table = read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True)
+    table = read_points_table(path, others_as_text=True)
     frame, x, y = (table[name] for name in POINT_COLUMNS)
     if frame.size == 0:
         raise DataError(path, "no points (only a header); tracking needs points in at least two frames")
