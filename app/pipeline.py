@@ -16,7 +16,7 @@ import numpy as np
 
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
-from seedtrack.data.errors import DataError
+from seedtrack.data.errors import DataError, warn
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.data.video import write_video
@@ -179,7 +179,10 @@ def detect_clip(path: Path, settings: DetectionSettings = DetectionSettings(), p
 def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> tuple[np.ndarray | None, Circle | None]:
     """The region of interest known before any frame is read ("auto" waits for the first)."""
     if isinstance(roi, Circle):
-        return circle_mask(size, roi), roi
+        mask = circle_mask(size, roi)
+        if not mask.any():
+            warn(f"--roi {roi.x:g},{roi.y:g},{roi.r:g}", f"the circle lies wholly outside the {size[0]}x{size[1]} frames; nothing will be detected")
+        return mask, roi
     if isinstance(roi, Path):
         return read_mask(roi, size), None
     return None, None

@@ -29,7 +29,7 @@ import numpy as np
 from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
-from .errors import DataError
+from .errors import DataError, check_file
 
 # verb -> (argument kinds, number of optional trailing arguments)
 _GRAMMAR = {
@@ -68,8 +68,7 @@ def read_corrections(path) -> list[Edit]:
         ``FILE:LINE: problem`` for the first line that is not a valid edit.
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     edits = []
     for number, text in text_lines(path):
         words = text.split("#", 1)[0].split()

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from .atomic import atomic_path
-from .errors import DataError, warn
+from .errors import DataError, check_file, warn
 from .formats import CSV_FORMATS, EXTENSIONS, described
 from .numbers import check_range
 
@@ -144,10 +144,7 @@ def read_table(
     array([1.5, 2.5])
     """
     path = check_table_name(path)
-    if path.is_dir():
-        raise DataError(path, "is a folder; give a CSV file")
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     header = _header(path)
     repeated = sorted({name for name in header if name and header.count(name) > 1})
     if repeated:

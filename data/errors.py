@@ -24,3 +24,21 @@ def warn(path, problem: str) -> None:
     import warnings
 
     warnings.warn(DataWarning(f"{path}: {problem}"), stacklevel=2)
+
+
+def check_file(path) -> "Path":
+    """``path`` as a Path, if it names an existing file.
+
+    Raises
+    ------
+    DataError
+        "no such file", or "is a folder" when it names one (a folder given where a file belongs).
+    """
+    from pathlib import Path
+
+    path = Path(path)
+    if path.is_dir():
+        raise DataError(path, "is a folder; give a file")
+    if not path.is_file():
+        raise DataError(path, "no such file")
+    return path

@@ -28,7 +28,7 @@ import numpy as np
 from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
-from .errors import DataError
+from .errors import DataError, check_file
 from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
 from .formats.xmltree import root_tag
@@ -139,8 +139,7 @@ def _known() -> str:
 
 
 def _sniff(path: Path) -> str:
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     names = EXTENSIONS.get(path.suffix.lower())
     if names is None:
         raise DataError(path, f"cannot tell the track format from the extension {path.suffix!r}; {_known()}")

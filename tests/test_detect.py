@@ -90,7 +90,7 @@ def test_mask_image_limits_the_search(dish, tmp_path):
         (["--threshold", "300"], "--threshold must lie in 0..255"),
         (["--roi", "10,10,-3"], "radius > 0"),
         (["--roi", "10,10"], "--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; '10,10' is none"),
-        (["--roi", "{folder}/missing.png"], "--roi takes auto, none, a circle X,Y,R"),
+        (["--roi", "{folder}/missing.png"], "missing.png: no such mask image file"),
         (["--detector", "log", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed (0..3)"),
         (["--preview", "{folder}/p.txt"], "name an image file"),

@@ -10,7 +10,7 @@ from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.trackfile import read_tracks
 from seedtrack.tracking.metrics import score_tracks
 
-from ..errors import UsageError
+from ..errors import UsageError, in_option_names
 from ..pipeline import DetectionSettings, run_pipeline
 from .run import add_tracker_options, lifecycle_config, tracker_config
 
@@ -37,8 +37,16 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run)
 
 
+# Fewer frames than this open no track: a track opens on three measured frames in a row.
+_MIN_FRAMES = 3
+
+
 def run(args: argparse.Namespace) -> int:
     config, lifecycle = tracker_config(args), lifecycle_config(args)
+    if args.seeds < 1:
+        raise UsageError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.frames < _MIN_FRAMES:
+        raise UsageError(f"--frames must be at least {_MIN_FRAMES} (a track opens on three frames in a row), got {args.frames}")
     try:
         spec = DishSpec(
             seeds=args.seeds,
@@ -48,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
             hidden_probability=args.hidden_probability,
         )
     except ValueError as error:
-        raise UsageError(str(error)) from None
+        raise UsageError(in_option_names(str(error), ("seeds", "frames", "rim_speed", "random_seed", "hidden_probability"))) from None
     with output_folder(args.out):
         scene = write_dish_clip(spec, args.out)
         run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), config, lifecycle, args.min_length, args.motion)

@@ -13,6 +13,7 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..progress import progress_bar
 from ..review import draw_review_page
+from .render import check_fits
 from ..wording import counted
 
 DEFAULT_EVERY = 5
@@ -39,8 +40,11 @@ def run(args: argparse.Namespace) -> int:
     last = tracks.first_frame + tracks.n_frames - 1
     wanted = set(range(tracks.first_frame, last + 1, args.every)) | {last}
     written = 0
-    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source, output_folder(args.out):
-        with progress_bar(source.frame_count, "review") as bar:
+    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
+        rows = tracks.to_rows()
+        # Before the output folder exists: another clip's tracks leave nothing behind.
+        check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], source, args.input)
+        with output_folder(args.out), progress_bar(source.frame_count, "review") as bar:
             for index, image in source:
                 if index in wanted:
                     page = draw_review_page(image, tracks, index - tracks.first_frame, index)

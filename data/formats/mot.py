@@ -19,7 +19,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..csvio import text_lines
-from ..errors import DataError
+from ..errors import DataError, check_file
 from .rows import Rows
 
 _SEPARATOR = re.compile(r"[,\s]+")
@@ -29,8 +29,7 @@ _FIELDS = 6
 def read(path) -> Rows:
     """Rows of a MOTChallenge file (blank lines and lines starting with ``#`` are skipped)."""
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     values, lines = [], []
     for number, text in text_lines(path):
         text = text.strip()

@@ -12,7 +12,7 @@ import xml.etree.ElementTree as ET
 from xml.parsers import expat
 
 from ..atomic import atomic_path
-from ..errors import DataError
+from ..errors import DataError, check_file
 
 
 @dataclass
@@ -45,8 +45,7 @@ def parse_xml(path) -> Element:
         If the file is missing or is not well-formed XML (naming the line and column).
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     parser = expat.ParserCreate()
     stack: list[Element] = []
     roots: list[Element] = []
@@ -78,8 +77,7 @@ def root_tag(path) -> tuple[str, int]:
         If the file is missing, or is malformed or ends before the root element.
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     parser = expat.ParserCreate()
     found: list[tuple[str, int]] = []
     parser.StartElementHandler = lambda tag, attrib: found.append((tag, parser.CurrentLineNumber)) if not found else None
