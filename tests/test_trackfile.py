@@ -158,9 +158,9 @@ def test_trackmate_branching_track_is_read_as_its_branches(tmp_path):
     (tmp_path / "branch.xml").write_text(text)
     with pytest.warns(DataWarning, match="1 TrackMate track.s. split or merge"):
         tracks = read_tracks(tmp_path / "branch.xml")
-    # Track 0 as it was; track 1 as three one-point branches: 200 and 300 (frame 0), 201 (frame 1).
+    # Track 0 as it was; track 1 as three one-point branches in spot order: 200, 201 (frame 1), 300.
     assert list(tracks.track_ids) == [0, 1, 2, 3] and tracks.present.sum() == 5
-    assert tracks.xy[1, 0].tolist() == [50, 60] and tracks.xy[2, 0].tolist() == [90, 90] and tracks.xy[3, 1].tolist() == [52, 61]
+    assert tracks.xy[1, 0].tolist() == [50, 60] and tracks.xy[2, 1].tolist() == [52, 61] and tracks.xy[3, 0].tolist() == [90, 90]
 
 
 def test_unknown_format_name(tmp_path):
