@@ -40,10 +40,11 @@ def run(args: argparse.Namespace) -> int:
     last = tracks.first_frame + tracks.n_frames - 1
     wanted = set(range(tracks.first_frame, last + 1, args.every)) | {last}
     written = 0
-    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
+    with open_frames(args.input) as whole:
         rows = tracks.to_rows()
         # Before the output folder exists: another clip's tracks leave nothing behind.
-        check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], source, args.input)
+        check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], whole, args.input)
+    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
         with output_folder(args.out), progress_bar(source.frame_count, "review") as bar:
             for index, image in source:
                 if index in wanted:
