@@ -66,7 +66,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         # A failed write names the temporary file, or no file at all; the user knows the target.
         if error.filename not in (None, str(temporary_path), temporary_path):
             raise
-        raise DataError(target, f"could not be written ({error.strerror or error}); nothing was written") from None
+        raise DataError(target, f"could not be written ({error.strerror or error})") from None
     except BaseException:
         temporary_path.unlink(missing_ok=True)
         raise
