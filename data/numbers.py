@@ -16,8 +16,9 @@ from .errors import DataError
 # Far beyond any frame a camera makes (a 16k frame, a microscope mosaic) and far inside the
 # range where squared distances, smoothness costs and fixed-point drawing stay exact.
 MAX_COORDINATE_PX = 1e6
-# Eleven days at 10 frames/s; frame indices index arrays, so a larger one is a typo.
-MAX_FRAME = 10_000_000
+# Eleven hours at 25 frames/s. Frame indices index arrays over the frames a track set spans, so
+# a larger one is a typo that would cost memory in proportion to it.
+MAX_FRAME = 1_000_000
 # Track ids are written as integers and must survive a round trip through a float column.
 MAX_ID = 2**53
 

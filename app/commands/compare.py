@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -72,8 +73,8 @@ def _short_name(path: Path, other: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
-    if not args.tol > 0:
-        raise UsageError(f"--tol must be > 0, got {args.tol:g}")
+    if not (args.tol > 0 and math.isfinite(args.tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
     a = read_tracks(args.a, args.format_a)
     b = read_tracks(args.b, args.format_b)
     warnings_a = disagreeing_links(a, b, args.tol)
