@@ -54,10 +54,11 @@ def check_range(path, name: str, values: np.ndarray, lines: Callable[[np.ndarray
 
     Example
     -------
-    >>> check_range("points.csv", "x", np.array([1.0, 1e300]), np.array([2, 3]))
-    Traceback (most recent call last):
-    ...
-    seedtrack.data.errors.DataError: points.csv: line 3: x = 1e+300 is out of range (a position in pixels: -1e+06 to 1e+06)
+    >>> try:
+    ...     check_range("points.csv", "x", np.array([1.0, 1e300]), np.array([2, 3]))
+    ... except DataError as error:
+    ...     print(error)
+    points.csv: line 3: x = 1e+300 is out of range (a position in pixels: -1e+06 to 1e+06)
     """
     if name not in RANGES:
         return
