@@ -15,7 +15,7 @@ import pytest
 from seedtrack.cli import main
 from seedtrack.data.csvio import read_table, write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip
-from seedtrack.data.trackfile import read_tracks, write_tracks
+from seedtrack.data.trackfile import read_tracks
 from seedtrack.tracking.ipan import IPANConfig, _Linker, ipan
 from seedtrack.tracking.trackers import TRACKERS
 

@@ -21,7 +21,7 @@ from seedtrack.data.frames import IMAGE_SUFFIXES
 from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from seedtrack.detection.roi import Circle
 
-from ..errors import UsageError, in_option_names, option_name, output_file
+from ..errors import UsageError, in_option_names, output_file
 from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
