@@ -30,6 +30,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
 from .errors import DataError, check_file
+from .numbers import check_range
 
 # verb -> (argument kinds, number of optional trailing arguments)
 _GRAMMAR = {
@@ -100,6 +101,7 @@ def _parse(where: str, words: list[str], number: int) -> Edit:
                 raise DataError(where, f"{'a track id' if kind == 'track' else 'a frame'} must be a whole number, got {word!r}") from None
             if kind == "frame" and value < 0:
                 raise DataError(where, f"frame must be >= 0 (frames count from 0), got {value}")
+        check_range(where, {"track": "track_id"}.get(kind, kind), np.array([float(value)]), np.array([number]))
         parsed.append(value)
     return Edit(verb, tuple(parsed), number)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from seedtrack.data.atomic import output_folder
@@ -43,6 +44,8 @@ _MIN_FRAMES = 3
 
 def run(args: argparse.Namespace) -> int:
     config, lifecycle = tracker_config(args), lifecycle_config(args)
+    if not (args.tol > 0 and math.isfinite(args.tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
     if args.seeds < 1:
         raise UsageError(f"--seeds must be at least 1, got {args.seeds}")
     if args.frames < _MIN_FRAMES:

@@ -6,6 +6,7 @@ through this and write with ``xml.etree``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 import xml.etree.ElementTree as ET
@@ -108,6 +109,8 @@ def number(path, element: Element, name: str, whole: bool = False) -> float:
         value = float(text)
     except ValueError:
         raise DataError(path, f"line {element.line}: {name}={text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise DataError(path, f"line {element.line}: {name}={text!r} is not a finite number")
     if whole and value != round(value):
         raise DataError(path, f"line {element.line}: {name}={text!r} is not a whole number")
     return value

@@ -31,12 +31,12 @@ def main() -> int:
         command.append(f"--hypothesis-seed={options.seed}")
     result = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True)
     total = 0
-    # Statistics blocks: "tests/test_fuzz.py::test_track:" then "- during generate phase (...): N passing examples, ..."
+    # Statistics blocks: "tests/test_fuzz.py::test_track:", then per phase "- N passing, M failing, and K invalid test cases"
     for block in re.split(r"\n(?=tests/test_fuzz\.py::)", result.stdout):
         name = re.match(r"tests/test_fuzz\.py::(\w+)", block)
         if not name:
             continue
-        passing = sum(int(n) for n in re.findall(r"(\d+) passing examples", block))
+        passing = sum(int(n) for n in re.findall(r"(\d+) passing", block))
         total += passing
         print(f"{name.group(1):20s} {passing:6d} examples")
     print(f"{'total':20s} {total:6d} examples; pytest: {result.stdout.strip().splitlines()[-1] if result.stdout.strip() else result.stderr[-500:]}")
