@@ -1,6 +1,6 @@
 """The fuzz suite's longer run, for before a release: at least 10,000 examples (issue 18).
 
-Runs tests/test_fuzz.py with ``SEEDTRACK_FUZZ_EXAMPLES`` (default 10,000, shared among the
+Runs tests/test_fuzz.py with ``SEEDTRACK_FUZZ_EXAMPLES`` (default 10,200, shared among the
 commands by the weights in the suite) and Hypothesis' statistics, then prints the examples each
 command ran and the total. Exit status is pytest's.
 
@@ -21,7 +21,9 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--examples", type=int, default=10_000)
+    # Shared by weight, and some commands have fewer distinct inputs than their share
+    # (experiment: 24), so a little above 10,000 is asked for to run at least 10,000.
+    parser.add_argument("--examples", type=int, default=10_200)
     parser.add_argument("--seed", type=int, default=None, help="hypothesis seed (default: random)")
     options = parser.parse_args()
     env = {**os.environ, "SEEDTRACK_FUZZ_EXAMPLES": str(options.examples)}
