@@ -1,23 +1,46 @@
 """The ``seedtrack`` command: parse options, call the library, report.
 
 Every subcommand lives in ``seedtrack.commands`` as a module with ``add_parser(subparsers)`` and
-``run(args) -> int``. Errors a user can fix are reported here in one line with exit status 2.
+``run(args) -> int``, and has a row in :data:`COMMANDS`. Only the module of the command given is
+imported, so ``seedtrack --help`` and ``--version`` start in the time Python itself takes rather
+than after numpy, scipy, OpenCV and PyAV have loaded.
+
+:func:`main` is the one boundary where failures become what a user sees: an error a user can fix
+(bad input, bad options, a file that cannot be read or written, a full disk) is one line on stderr
+naming the file and the cause, exit status 2; a warning (a :class:`DataWarning` from the library:
+input it can use but a user should hear about) is one line and the work goes on; Ctrl-C at any moment, start-up included, is one line
+and exit status 130.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.metadata
+import importlib
 import os
 import sys
+import warnings
 from typing import Sequence
 
-from seedtrack.data.errors import DataError
+from seedtrack.data.errors import DataError, DataWarning
 
-from .commands import annotate, batch, compare, correct, demo, detect, evaluate, experiment, render, review, run, synth, track
 from .errors import UsageError
 
-COMMANDS = (run, batch, demo, detect, track, render, compare, evaluate, correct, review, annotate, synth, experiment)
+# Command name -> the line ``seedtrack --help`` lists it with, in the order listed.
+COMMANDS = {
+    "run": "detect, track and draw a clip",
+    "batch": "run many clips, on this machine or a Dask cluster",
+    "demo": "generate a rotating-dish clip, track it and score the tracks against the truth",
+    "detect": "measure objects in every frame (detections.csv), with a preview image to tune the options",
+    "track": "link measured points (frame,x,y) into tracks",
+    "render": "draw tracks over the clip: an MP4, a GIF, a PNG or a folder of PNGs",
+    "compare": "draw two track sets over the clip, where they disagree in a warning colour",
+    "evaluate": "score tracks against ground truth",
+    "correct": "apply hand edits to tracks, to make ground truth",
+    "review": "draw track ids on frames, to write corrections from",
+    "annotate": "make or fix ground truth by pointing, in a local web page",
+    "synth": "generate synthetic points with ground truth",
+    "experiment": "rerun one of the paper's PSMG experiments with every tracker",
+}
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
@@ -25,36 +48,90 @@ EXIT_INTERRUPTED = 130
 EXIT_BROKEN_PIPE = 141
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every subcommand registered."""
+class _Version(argparse.Action):
+    """``--version``, reading the installed version only when asked (importlib.metadata is slow to load)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help="show the version and exit"):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from importlib.metadata import version
+
+        print(f"{parser.prog} {version('seedtrack')}")
+        parser.exit()
+
+
+class _Registrar:
+    """What a command module's ``add_parser`` is given: adds its parser with the line :data:`COMMANDS` lists it with."""
+
+    def __init__(self, subparsers, summary: str) -> None:
+        self._subparsers, self._summary = subparsers, summary
+
+    def add_parser(self, name: str, **options) -> argparse.ArgumentParser:
+        return self._subparsers.add_parser(name, help=self._summary, **options)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser: every command listed, ``command``'s options registered (its module imported).
+
+    Example
+    -------
+    >>> build_parser("track").parse_args(["track", "points.csv", "--out", "t.csv"]).algorithm
+    'goa-updown'
+    """
     parser = argparse.ArgumentParser(
         prog="seedtrack",
         description="Track many small look-alike objects through video by their motion (GOA-updown).",
     )
-    parser.add_argument("--version", action="version", version=f"%(prog)s {importlib.metadata.version('seedtrack')}")
+    parser.add_argument("--version", action=_Version)
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for command in COMMANDS:
-        command.add_parser(subparsers)
+    for name, summary in COMMANDS.items():
+        if name == command:
+            importlib.import_module(f"seedtrack.commands.{name}").add_parser(_Registrar(subparsers, summary))
+        else:
+            # Listed by name only: argparse dispatches to the one command given, never to these.
+            subparsers.add_parser(name, help=summary, add_help=False)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``seedtrack`` with the given arguments; returns the exit status."""
+    """Run ``seedtrack`` with the given arguments; returns the exit status.
+
+    Example
+    -------
+    >>> main(["evaluate", "missing.csv", "--truth", "missing.csv"])
+    2
+    """
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    # The top level takes no option with a value, so the first word that is not an option is the command.
+    command = next((word for word in argv if not word.startswith("-")), None)
+    command = command if command in COMMANDS else None
+    prefix = f"seedtrack {command}" if command else "seedtrack"
     try:
-        return _run(build_parser().parse_args(argv))
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", DataWarning)
+            warnings.showwarning = lambda message, *_, **__: print(f"{prefix}: warning: {' '.join(str(message).splitlines())}", file=sys.stderr)
+            args = build_parser(command).parse_args(argv)
+            return args.run(args)
+    except (DataError, UsageError) as error:
+        return _fail(prefix, str(error))
+    except KeyboardInterrupt:
+        print(f"{prefix}: interrupted; files already written are complete", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # The reader (e.g. `| head`) has gone; files are written before anything is printed, and
         # pointing stdout at devnull keeps Python's exit-time flush from raising a second time.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except OSError as error:
+        # A file the library opened itself (a video, a frame, a font): its name is in the error.
+        cause = error.strerror or str(error) or type(error).__name__
+        return _fail(prefix, f"{error.filename}: {cause}" if error.filename else cause)
+    except MemoryError:
+        return _fail(prefix, "not enough memory for this input; use fewer frames or points, or a smaller --scale")
 
 
-def _run(args: argparse.Namespace) -> int:
-    try:
-        return args.run(args)
-    except (DataError, UsageError) as error:
-        print(f"seedtrack {args.command}: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    except KeyboardInterrupt:
-        print(f"seedtrack {args.command}: interrupted; files already written are complete", file=sys.stderr)
-        return EXIT_INTERRUPTED
+def _fail(prefix: str, message: str) -> int:
+    # One line whatever the message: a cause quoted from a library may hold a newline.
+    print(f"{prefix}: error: {' '.join(message.splitlines())}", file=sys.stderr)
+    return EXIT_USAGE

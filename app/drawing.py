@@ -10,6 +10,7 @@ picture reads at 640x480 and at 4K.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from typing import Iterable, Iterator, Sequence
 
@@ -54,6 +55,11 @@ _RING = 1.6
 _MARK_SIZE = 1.6
 # A detection this close to a measured track point (pixels) is that point.
 FALSE_DETECTION_TOLERANCE = 0.5
+
+# Drawn frames smaller than this show nothing; larger than this exceed what H.264 encoders take
+# (level 6.2: 8192 x 4320) and what memory holds per frame.
+_SMALLEST_SIDE = 16
+_LARGEST_SIDE = 8192
 
 
 def track_colour(track_id: int) -> tuple[int, int, int]:
@@ -112,10 +118,15 @@ class View:
         """
         width, height = frame_size
         box = (0, 0, width, height) if crop is None else _parse_crop(crop, frame_size)
-        if not scale > 0:
-            raise UsageError(f"--scale must be > 0, got {scale:g}")
-        size = (max(2, round((box[2] - box[0]) * scale)), max(2, round((box[3] - box[1]) * scale)))
-        return cls(box, size)
+        if not (scale > 0 and math.isfinite(scale)):
+            raise UsageError(f"--scale must be a finite number > 0, got {scale:g}")
+        exact = ((box[2] - box[0]) * scale, (box[3] - box[1]) * scale)
+        if min(exact) < _SMALLEST_SIDE or max(exact) > _LARGEST_SIDE:
+            raise UsageError(
+                f"--scale {scale:g} draws {exact[0]:.0f}x{exact[1]:.0f} frames; each side must be {_SMALLEST_SIDE} to "
+                f"{_LARGEST_SIDE} pixels (the view is {box[2] - box[0]}x{box[3] - box[1]})"
+            )
+        return cls(box, (round(exact[0]), round(exact[1])))
 
     @property
     def _factors(self) -> np.ndarray:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 from pathlib import Path
+from typing import Iterable
 
 
 class UsageError(Exception):
@@ -22,3 +24,17 @@ def output_file(text: str) -> Path:
     if text.endswith(("/", os.sep)):
         raise argparse.ArgumentTypeError(f"{text} names a folder; give a file name")
     return Path(text)
+
+
+def in_option_names(message: str, fields: Iterable[str]) -> str:
+    """A library's message about its settings (``bad DishSpec: hidden_probability must be in
+    [0, 1]``) in the command's words (``--hidden-probability must be in [0, 1]``).
+
+    Example
+    -------
+    >>> in_option_names("bad DishSpec: rim_speed must be >= 0", ["rim_speed", "seeds"])
+    '--rim-speed must be >= 0'
+    """
+    # Longest names first, so that background_size is not read as background.
+    names = re.compile(r"\b(" + "|".join(sorted(map(re.escape, fields), key=len, reverse=True)) + r")\b")
+    return names.sub(lambda match: option_name(match.group(1)), re.sub(r"^bad \w+: ", "", message))

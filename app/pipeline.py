@@ -20,14 +20,14 @@ import numpy as np
 
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import TRACK_COLUMNS, write_table
-from seedtrack.data.errors import DataError
+from seedtrack.data.errors import DataError, warn
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
 from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames
-from seedtrack.detection.roi import Circle
+from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short
 from seedtrack.tracking.linking import GOA_FAMILY, link_goa, pass_steps
@@ -171,7 +171,9 @@ def detect_clip(
 
 def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> str | Circle | np.ndarray:
     """The region of interest as :class:`seedtrack.detection.clip.ClipDetector` takes it: a mask
-    file read, anything else as it is."""
+    file read, anything else as it is (a circle wholly outside the frames is warned of)."""
+    if isinstance(roi, Circle) and not circle_mask(size, roi).any():
+        warn(f"--roi {roi.x:g},{roi.y:g},{roi.r:g}", f"the circle lies wholly outside the {size[0]}x{size[1]} frames; nothing will be detected")
     return read_mask(roi, size) if isinstance(roi, Path) else roi
 
 

@@ -43,7 +43,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     Raises
     ------
     DataError
-        If the target's folder does not exist or cannot be written, or the target is a folder.
+        If the target's folder does not exist or cannot be written, the target is a folder, or
+        writing fails (a full disk: ENOSPC, a quota...), naming the target and the cause.
     """
     target = Path(path)
     folder = check_target(target)
@@ -60,6 +61,12 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     try:
         yield temporary_path
         os.replace(temporary_path, target)
+    except OSError as error:
+        temporary_path.unlink(missing_ok=True)
+        # A failed write names the temporary file, or no file at all; the user knows the target.
+        if error.filename not in (None, str(temporary_path), temporary_path):
+            raise
+        raise DataError(target, f"could not be written ({error.strerror or error})") from None
     except BaseException:
         temporary_path.unlink(missing_ok=True)
         raise

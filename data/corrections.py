@@ -29,7 +29,8 @@ import numpy as np
 from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
-from .errors import DataError
+from .errors import DataError, check_file
+from .numbers import check_range
 
 # verb -> (argument kinds, number of optional trailing arguments)
 _GRAMMAR = {
@@ -68,8 +69,7 @@ def read_corrections(path) -> list[Edit]:
         ``FILE:LINE: problem`` for the first line that is not a valid edit.
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     edits = []
     for number, text in text_lines(path):
         words = text.split("#", 1)[0].split()
@@ -101,6 +101,7 @@ def _parse(where: str, words: list[str], number: int) -> Edit:
                 raise DataError(where, f"{'a track id' if kind == 'track' else 'a frame'} must be a whole number, got {word!r}") from None
             if kind == "frame" and value < 0:
                 raise DataError(where, f"frame must be >= 0 (frames count from 0), got {value}")
+        check_range(where, {"track": "track_id"}.get(kind, kind), np.array([float(value)]), np.array([number]))
         parsed.append(value)
     return Edit(verb, tuple(parsed), number)
 

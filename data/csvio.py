@@ -9,29 +9,27 @@ from __future__ import annotations
 
 import csv
 import os
+import re
+from functools import partial
 from pathlib import Path
 from typing import Iterator
 
 import numpy as np
+import pandas as pd
 
 from .atomic import atomic_path
-from .errors import DataError
+from .errors import DataError, check_file, warn
+from .formats import CSV_FORMATS, EXTENSIONS, described
+from .numbers import check_range
 
 DETECTION_COLUMNS = ("frame", "x", "y", "area")
 TRACK_COLUMNS = ("track_id", "frame", "x", "y", "interpolated")
 
 # Enough digits that a position survives a round trip to well below a thousandth of a pixel,
 # few enough that files stay readable; fixed so that the same input gives the same bytes.
-_FLOAT_FORMAT = "{:.4f}"
-_ROWS_PER_BLOCK = 10_000
-
-
-def _format_column(values: np.ndarray) -> list[str]:
-    if values.dtype.kind in "OUS":
-        return [str(v) for v in values]
-    if np.issubdtype(values.dtype, np.integer) or values.dtype == bool:
-        return [str(int(v)) for v in values]
-    return ["" if np.isnan(v) else _FLOAT_FORMAT.format(v) for v in values.astype(float)]
+_FLOAT_FORMAT = "%.4f"
+# Written NaNs, which are numbers (refused where a finite one is needed), not text.
+NAN_WORDS = ("nan", "+nan", "-nan", "")
 
 
 def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None:
@@ -43,23 +41,48 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
         Output file; replaced only once the whole table is written.
     columns : dict of str to ndarray
         Column name to 1-D array; integer and boolean columns are written as integers, float
-        columns with four decimals, text (object or string) columns as they are.
+        columns with four decimals (NaN as an empty field), text (object or string) columns as
+        they are.
+
+    Example
+    -------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "points.csv"
+    >>> write_table(out, {"frame": np.array([0, 1]), "x": np.array([1.5, 2.25]), "y": np.array([3.0, np.nan])})
+    >>> out.read_text()
+    'frame,x,y\\n0,1.5000,3.0000\\n1,2.2500,\\n'
     """
-    names = list(columns)
-    lengths = {len(columns[name]) for name in names}
+    lengths = {len(values) for values in columns.values()}
     if len(lengths) > 1:
         raise ValueError(f"columns differ in length: {sorted(lengths)}")
-    arrays = [np.asarray(columns[name]) for name in names]
-    rows = lengths.pop() if lengths else 0
+    check_table_name(path)
+    table = pd.DataFrame({name: _for_writing(np.asarray(values)) for name, values in columns.items()})
     with atomic_path(path) as temporary:
-        with open(temporary, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(names)
-            # Formatted a block at a time: as text all at once, a long clip's detections took
-            # 50 MB (120,000 rows), more than anything else in `run`.
-            for start in range(0, rows, _ROWS_PER_BLOCK):
-                block = [_format_column(array[start : start + _ROWS_PER_BLOCK]) for array in arrays]
-                writer.writerows(zip(*block))
+        table.to_csv(temporary, index=False, float_format=_FLOAT_FORMAT, na_rep="", lineterminator="\n", encoding="utf-8")
+
+
+def check_table_name(path: str | os.PathLike) -> Path:
+    """Refuse a CSV table named with an extension that :data:`~seedtrack.data.formats.EXTENSIONS`
+    gives to another format (``points.txt`` would be MOTChallenge text to every other command).
+
+    Raises
+    ------
+    DataError
+        Naming the extension and what it means.
+    """
+    path = Path(path)
+    names = EXTENSIONS.get(path.suffix.lower())
+    if names is not None and not set(names) & set(CSV_FORMATS):
+        raise DataError(path, f"{path.suffix} names {' or '.join(names)} files, not a CSV table; name it .csv (extensions: {described()})")
+    return path
+
+
+def _for_writing(values: np.ndarray) -> np.ndarray:
+    if values.dtype == bool:
+        return values.astype(np.int64)
+    if values.dtype.kind in "OUS" or np.issubdtype(values.dtype, np.integer):
+        return values
+    return values.astype(float)
 
 
 def text_lines(path: Path) -> Iterator[tuple[int, str]]:
@@ -84,14 +107,14 @@ def read_table(
     integer: tuple[str, ...] = ("frame", "track_id", "interpolated"),
     others_as_text: bool = False,
 ) -> dict[str, np.ndarray]:
-    """Read a CSV table with a header row into numeric columns.
+    """Read a CSV table with a header row into numeric columns (through pandas' C parser).
 
     Parameters
     ----------
     path : path-like
-        The CSV file.
+        The CSV file (UTF-8; blank lines hold no row).
     required : tuple of str
-        Columns that must be present.
+        Columns that must be present; their values must be finite numbers.
     integer : tuple of str
         Columns parsed as integers where present; every other column is parsed as float when
         all its values are numbers, and kept as text otherwise.
@@ -102,66 +125,164 @@ def read_table(
     Returns
     -------
     dict of str to ndarray
-        One array per column, in file order.
+        One array per column, in file order. Columns with a range in
+        :data:`seedtrack.data.numbers.RANGES` (frame, x, y, ...) have been checked against it.
 
     Raises
     ------
     DataError
-        If the file is missing, empty, repeats a column name, lacks a required column, or holds text, NaN or
-        infinity in a required column.
+        If the file is missing, empty, repeats a column name, lacks a required column, has a
+        row with more fields than the header, or holds text, NaN, infinity or a value out of
+        range in a required or integer column (naming the line).
+
+    Example
+    -------
+    >>> import tempfile, pathlib
+    >>> points = pathlib.Path(tempfile.mkdtemp()) / "points.csv"
+    >>> _ = points.write_text("frame,x,y\\n0,1.5,2\\n1,2.5,2\\n")
+    >>> read_table(points, required=("frame", "x", "y"))["x"]
+    array([1.5, 2.5])
     """
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
-    rows = list(csv.reader(line for _, line in text_lines(path)))
-    if not rows:
-        raise DataError(path, "the file is empty (expected a header row)")
-    header = [name.strip() for name in rows[0]]
+    path = check_table_name(path)
+    check_file(path)
+    header = _header(path)
     repeated = sorted({name for name in header if name and header.count(name) > 1})
     if repeated:
         raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")
-    body = rows[1:]
-    # Editors and hand-written files often end with empty lines; they hold no row.
-    while body and not any(field.strip() for field in body[-1]):
-        body.pop()
-    for line_number, row in enumerate(body, start=2):
-        if len(row) != len(header):
-            raise DataError(path, f"line {line_number} has {len(row)} fields, the header has {len(header)}")
+    text = [name for name in header if others_as_text and name not in required and name not in integer]
+    try:
+        frame = pd.read_csv(
+            path,
+            header=0,
+            names=header,
+            index_col=False,
+            encoding="utf-8-sig",
+            dtype={name: str for name in text},
+            keep_default_na=False,
+            na_values={name: [""] for name in header if name not in text},
+            skipinitialspace=True,
+        )
+    except UnicodeDecodeError as error:
+        raise DataError.not_utf8(path, error) from None
+    except pd.errors.ParserError as error:
+        raise DataError(path, _parser_problem(error, len(header))) from None
     table: dict[str, np.ndarray] = {}
-    for position, name in enumerate(header):
-        texts = [row[position].strip() for row in body]
-        if others_as_text and name not in required and name not in integer:
-            table[name] = np.array(texts, dtype=object)
+    for name in header:
+        values = frame[name]
+        if name in text:
+            table[name] = values.to_numpy(dtype=object)
             continue
-        table[name] = _parse_column(path, name, texts, name in required, name in integer)
+        table[name] = _numeric_column(path, name, values, name in required, name in integer)
     return table
 
 
-def _parse_column(path: Path, name: str, texts: list[str], required: bool, integer: bool) -> np.ndarray:
-    try:
-        values = np.array([float(text) for text in texts], dtype=float)
-    except ValueError:
-        if required or integer:
-            bad = next(i for i, text in enumerate(texts) if not _is_number(text))
-            raise DataError(path, f"line {bad + 2}: column {name} holds {texts[bad]!r}, not a number") from None
-        return np.array(texts, dtype=object)
-    if required and not np.all(np.isfinite(values)):
-        bad = int(np.flatnonzero(~np.isfinite(values))[0])
-        raise DataError(path, f"line {bad + 2}: column {name} holds {texts[bad]!r}, not a finite number")
+def _header(path: Path) -> list[str]:
+    lines = text_lines(path)
+    first = next((line for _, line in lines if line.strip()), None)
+    lines.close()
+    if first is None:
+        raise DataError(path, "the file is empty (expected a header row)")
+    return [name.strip() for name in next(csv.reader([first]))]
+
+
+def _parser_problem(error: Exception, fields: int) -> str:
+    # pandas says "Expected 3 fields in line 5, saw 4"; the line is the file's.
+    found = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(error))
+    if found:
+        return f"line {found.group(2)} has {found.group(3)} fields, the header has {fields}"
+    return f"not a readable CSV table ({' '.join(str(error).split())})"
+
+
+def _numeric_column(path: Path, name: str, values: "pd.Series", required: bool, integer: bool) -> np.ndarray:
+    numbers = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
+    unparsed = _text(values)
+    if unparsed.any() and not (required or integer):
+        return values.astype(object).where(values.notna(), "").to_numpy(dtype=object)
+    if (required or integer) and not np.all(np.isfinite(numbers)):
+        bad = int(np.flatnonzero(~np.isfinite(numbers))[0])
+        written = _as_written(values, bad)
+        problem = "is empty" if not written.strip() else f"holds {written!r}, " + ("not a number" if unparsed[bad] else "not a finite number")
+        raise DataError(path, f"line {data_lines(path, bad)}: column {name} {problem}")
     if integer:
-        if not np.all(values == np.round(values)):
-            bad = int(np.flatnonzero(values != np.round(values))[0])
-            raise DataError(path, f"line {bad + 2}: column {name} holds {texts[bad]!r}, not a whole number")
-        return values.astype(np.int64)
-    return values
+        whole = numbers == np.round(numbers)
+        if not whole.all():
+            bad = int(np.flatnonzero(~whole)[0])
+            raise DataError(path, f"line {data_lines(path, bad)}: column {name} holds {_as_written(values, bad)!r}, not a whole number")
+    check_range(path, name, numbers, partial(data_lines, path))
+    return numbers.astype(np.int64) if integer else numbers
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+def _text(values: "pd.Series") -> np.ndarray:
+    """Where a field holds text that is no number: an empty field (NaN) and "nan", "inf" as
+    written are numbers here, so that a numeric column with blanks stays numeric."""
+    if values.dtype.kind in "iuf":
+        return np.zeros(len(values), bool)
+    written = values.astype(object).where(values.notna(), "").astype(str).str.strip()
+    return (pd.to_numeric(written.where(written != "", "nan"), errors="coerce").isna() & ~written.str.lower().isin(NAN_WORDS)).to_numpy()
+
+
+def _as_written(values: "pd.Series", row: int) -> str:
+    value = values.iloc[row]
+    return "" if value is None or (isinstance(value, float) and np.isnan(value)) else str(value)
+
+
+def data_lines(path: Path, rows: np.ndarray | None = None) -> np.ndarray:
+    """The 1-based line of each data row of a CSV file (or of the rows given by position): every
+    line after the header that is not blank, as pandas reads it. For error messages only: it
+    reads the file again."""
+    lines = np.array([number for number, line in text_lines(path) if line.strip()][1:], dtype=np.int64)
+    return lines if rows is None else lines[rows]
+
+
+def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[str, np.ndarray]:
+    """Read a table of measured points (columns frame, x, y and any others), each point once.
+
+    A row that repeats an earlier row's frame, x and y is the same measurement twice (a file
+    joined with itself, a detection written twice): it is dropped, with a warning naming the
+    first such line, so that no tracker sees two objects in one place.
+
+    Parameters
+    ----------
+    path : path-like
+    others_as_text : bool
+        As in :func:`read_table`.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The columns, in file order, without the repeated rows.
+
+    Raises
+    ------
+    DataError
+        As :func:`read_table`, for a missing column or a value that is not a number in range.
+
+    Example
+    -------
+    >>> import tempfile, pathlib, warnings
+    >>> points = pathlib.Path(tempfile.mkdtemp()) / "points.csv"
+    >>> _ = points.write_text("frame,x,y\\n0,1,2\\n0,1,2\\n1,2,2\\n")
+    >>> with warnings.catch_warnings(record=True):
+    ...     read_points(points)["x"]
+    array([1., 2.])
+    """
+    table = read_table(path, required=("frame", "x", "y"), integer=("frame",), others_as_text=others_as_text)
+    frame, x, y = table["frame"], table["x"], table["y"]
+    order = np.lexsort((np.arange(frame.size), y, x, frame))
+    same = (np.diff(frame[order]) == 0) & (np.diff(x[order]) == 0) & (np.diff(y[order]) == 0)
+    if not same.any():
+        return table
+    # Equal rows sit together in that order, earliest first: it is kept, the others repeat it.
+    starts = np.concatenate(([True], ~same))
+    earliest = order[starts][np.cumsum(starts) - 1]
+    repeats = order[~starts]
+    first = int(np.argmin(repeats))
+    earlier, first = int(earliest[~starts][first]), int(repeats[first])
+    lines = data_lines(Path(path), np.array([earlier, first]))
+    warn(path, f"{repeats.size} row(s) repeat an earlier row's frame, x and y (first line {lines[1]}, as line {lines[0]}); each point is read once")
+    keep = np.ones(frame.size, bool)
+    keep[repeats] = False
+    return {name: values[keep] for name, values in table.items()}

@@ -17,3 +17,32 @@ class DataError(Exception):
     def not_utf8(cls, path, error: UnicodeDecodeError) -> "DataError":
         """The error for a text file in another encoding (Excel's plain "CSV" is cp1252)."""
         return cls(path, f"is not UTF-8 text (byte {error.start} of the file); save it as UTF-8 ('CSV UTF-8' in Excel)")
+
+
+class DataWarning(UserWarning):
+    """Input the program can use but that a user should hear about (the command prints it as one line)."""
+
+
+def warn(path, problem: str) -> None:
+    """Tell the user about ``path`` without stopping: a :class:`DataWarning` naming the file."""
+    import warnings
+
+    warnings.warn(DataWarning(f"{path}: {problem}"), stacklevel=2)
+
+
+def check_file(path) -> "Path":
+    """``path`` as a Path, if it names an existing file.
+
+    Raises
+    ------
+    DataError
+        "no such file", or "is a folder" when it names one (a folder given where a file belongs).
+    """
+    from pathlib import Path
+
+    path = Path(path)
+    if path.is_dir():
+        raise DataError(path, "is a folder; give a file")
+    if not path.is_file():
+        raise DataError(path, "no such file")
+    return path

@@ -12,6 +12,9 @@ mot        MOTChallenge text (1-based frames, boxes)     ``.txt``
 trackmate  TrackMate XML (spots, edges, tracks)          ``.xml`` with root ``<TrackMate>``
 isbi       ISBI 2012 particle-tracking challenge XML     ``.xml`` with root ``<root>``
 ========== ============================================= =====================================
+
+The extensions come from the one table :data:`seedtrack.data.formats.EXTENSIONS`, which writers
+follow too (``.csv`` writes ``csv``, ``.txt`` ``mot``, ``.xml`` ``trackmate``).
 """
 
 from __future__ import annotations
@@ -25,13 +28,12 @@ import numpy as np
 from seedtrack.tracking.tracks import Tracks
 
 from .csvio import text_lines
-from .errors import DataError
-from .formats import isbi, mot, seedtrack_csv, trackmate, trackpy
+from .errors import DataError, check_file
+from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
 from .formats.xmltree import root_tag
 
 FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi}
-_WRITE_DEFAULTS = {".csv": "csv", ".txt": "mot", ".xml": "trackmate"}
 
 
 def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
@@ -86,15 +88,44 @@ def write_tracks(
     DataError
         If the format is unknown or the file cannot be written.
     """
-    path = Path(path)
-    if format is None:
-        format = _WRITE_DEFAULTS.get(path.suffix.lower())
-        if format is None:
-            raise DataError(path, f"cannot tell the track format from the extension {path.suffix!r}; {_known()}")
     rows = tracks.to_rows()
     if frame_indices is not None:
         rows["frame"] = np.asarray(frame_indices)[rows["frame"] - tracks.first_frame]
-    FORMATS[_check_format(format)].write(path, rows)
+    write_rows(path, rows, format)
+
+
+def output_format(path: str | os.PathLike, format: str | None = None) -> str:
+    """The format :func:`write_tracks` writes ``path`` in: ``format``, or the first the
+    extension's row of :data:`~seedtrack.data.formats.EXTENSIONS` names.
+
+    Raises
+    ------
+    DataError
+        If the format is unknown or the extension names none.
+
+    Example
+    -------
+    >>> output_format("result.txt")
+    'mot'
+    """
+    if format is not None:
+        return _check_format(format)
+    names = EXTENSIONS.get(Path(path).suffix.lower())
+    if names is None:
+        raise DataError(path, f"cannot tell the track format from the extension {Path(path).suffix!r}; {_known()}")
+    return names[0]
+
+
+def write_rows(path: str | os.PathLike, rows: dict[str, np.ndarray], format: str | None = None) -> None:
+    """Write flat track rows (the columns of :meth:`Tracks.to_rows`; our CSV also keeps any
+    further columns, after those) atomically, in the format :func:`output_format` picks.
+
+    Raises
+    ------
+    DataError
+        If the format is unknown or the file cannot be written.
+    """
+    FORMATS[output_format(path, format)].write(Path(path), rows)
 
 
 def _check_format(name: str) -> str:
@@ -104,29 +135,28 @@ def _check_format(name: str) -> str:
 
 
 def _known() -> str:
-    return f"use .csv, .txt (MOTChallenge) or .xml (TrackMate, ISBI), or give a format: {', '.join(FORMATS)}"
+    return f"use {described()}, or give a format: {', '.join(FORMATS)}"
 
 
 def _sniff(path: Path) -> str:
-    if not path.is_file():
-        raise DataError(path, "no such file")
-    suffix = path.suffix.lower()
-    if suffix == ".csv":
+    check_file(path)
+    names = EXTENSIONS.get(path.suffix.lower())
+    if names is None:
+        raise DataError(path, f"cannot tell the track format from the extension {path.suffix!r}; {_known()}")
+    if len(names) == 1:
+        return names[0]
+    if "csv" in names:
         lines = text_lines(path)
-        header = {name.strip() for name in next(csv.reader(line for _, line in lines), [])}
+        header = {name.strip() for name in next(csv.reader(line for _, line in lines if line.strip()), [])}
         lines.close()
         if {"track_id", "frame", "x", "y"} <= header:
             return "csv"
         if {"particle", "frame", "x", "y"} <= header:
             return "trackpy"
         raise DataError(path, f"line 1: a track CSV needs columns track_id,frame,x,y (ours) or frame,particle,x,y (trackpy); found {','.join(sorted(header)) or 'nothing'}")
-    if suffix == ".txt":
-        return "mot"
-    if suffix == ".xml":
-        tag, line = root_tag(path)
-        if tag == "TrackMate":
-            return "trackmate"
-        if tag == "root":
-            return "isbi"
-        raise DataError(path, f"line {line}: XML root <{tag}> is neither TrackMate (<TrackMate>) nor ISBI (<root>)")
-    raise DataError(path, f"cannot tell the track format from the extension {path.suffix!r}; {_known()}")
+    tag, line = root_tag(path)
+    if tag == "TrackMate":
+        return "trackmate"
+    if tag == "root":
+        return "isbi"
+    raise DataError(path, f"line {line}: XML root <{tag}> is neither TrackMate (<TrackMate>) nor ISBI (<root>)")

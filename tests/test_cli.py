@@ -13,7 +13,7 @@ from seedtrack.data.dish import DishSpec, write_dish_clip
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 @pytest.fixture(scope="module")
@@ -121,7 +121,7 @@ def _folder(path):
 def test_output_piped_into_a_closed_reader_is_not_a_traceback(tmp_path):
     tracks = _write(tmp_path / "tracks.csv", b"track_id,frame,x,y,interpolated\n0,0,1,1,0\n0,1,2,2,0\n1,0,9,9,0\n1,1,8,8,0\n")
     process = subprocess.Popen(
-        [sys.executable, "-m", "app", "evaluate", tracks, "--truth", tracks],
+        [sys.executable, "-m", "seedtrack", "evaluate", tracks, "--truth", tracks],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

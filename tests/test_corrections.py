@@ -80,7 +80,7 @@ def test_bad_edits_name_file_and_line(tmp_path, text, message):
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 def test_correct_command_rejects_a_missing_track_and_writes_nothing(tmp_path):

@@ -21,7 +21,7 @@ SPEC = DishSpec(seeds=30, frames=4, width=320, height=240, rim_speed=15.0, rando
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 @pytest.fixture(scope="module")
@@ -93,7 +93,7 @@ def test_mask_image_limits_the_search(dish, tmp_path):
         (["--threshold", "300"], "--threshold must lie in 0..255"),
         (["--roi", "10,10,-3"], "radius > 0"),
         (["--roi", "10,10"], "--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; '10,10' is none"),
-        (["--roi", "{folder}/missing.png"], "--roi takes auto, none, a circle X,Y,R"),
+        (["--roi", "{folder}/missing.png"], "missing.png: no such mask image file"),
         (["--detector", "spot", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
         (["--diameter", "4"], "--diameter must be an odd number of pixels >= 3, got 4"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed (0..3)"),

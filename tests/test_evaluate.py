@@ -16,7 +16,7 @@ from seedtrack.tracking.tracks import Tracks
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 def _lines(n_frames=6):

@@ -113,7 +113,7 @@ def test_same_options_give_the_same_files(tmp_path):
     for folder in ("a", "b"):
         out = tmp_path / folder
         result = subprocess.run(
-            [sys.executable, "-m", "app", "experiment", "occlusion", "--out", str(out), "--runs", "2", "--jobs", "2", "--tiny"],
+            [sys.executable, "-m", "seedtrack", "experiment", "occlusion", "--out", str(out), "--runs", "2", "--jobs", "2", "--tiny"],
             capture_output=True, text=True,
         )
         assert result.returncode == 0, result.stderr

@@ -199,7 +199,7 @@ def test_frames_are_drawn_alike_at_any_size():
         (lambda tmp, clip: _write(tmp / "odd.csv", "id,t,px,py\n1,0,3,4\n"), "clip.mp4", "track_id,frame,x,y"),
         (lambda tmp, clip: clip / "truth.csv", "missing/clip.mp4", "does not exist"),
         (lambda tmp, clip: clip / "truth.csv", "clip.avi", "unsupported output extension"),
-        (lambda tmp, clip: clip / "truth.csv", "clip.gif --scale 0", "--scale must be > 0"),
+        (lambda tmp, clip: clip / "truth.csv", "clip.gif --scale 0", "--scale must be a finite number > 0"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_no_file(clip, tmp_path, capsys, make, out, message):

@@ -11,7 +11,7 @@ from seedtrack.data.csvio import read_table
 
 
 def seedtrack(*args):
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "seedtrack", *map(str, args)], capture_output=True, text=True)
 
 
 def _measure(report: str, name: str) -> float:

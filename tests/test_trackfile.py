@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from seedtrack.data.corrections import read_corrections
-from seedtrack.data.errors import DataError
+from seedtrack.data.errors import DataError, DataWarning
 from seedtrack.data.trackfile import read_tracks, write_tracks
 from seedtrack.tracking.tracks import Tracks
 
@@ -150,13 +150,17 @@ def test_bad_files_raise_one_line_errors_naming_file_and_line(tmp_path, name, te
     assert "\n" not in str(caught.value)
 
 
-def test_trackmate_branching_track_is_rejected(tmp_path):
+def test_trackmate_branching_track_is_read_as_its_branches(tmp_path):
+    # Spot 201 of track 1 gets a second predecessor: two branches meet there.
     text = TRACKMATE.replace("<FilteredTracks><TrackID TRACK_ID=\"1\" /></FilteredTracks>", "").replace(
         '<Edge SPOT_SOURCE_ID="200" SPOT_TARGET_ID="201" />', '<Edge SPOT_SOURCE_ID="200" SPOT_TARGET_ID="201" /><Edge SPOT_SOURCE_ID="300" SPOT_TARGET_ID="201" />'
     )
     (tmp_path / "branch.xml").write_text(text)
-    with pytest.raises(DataError, match="track 1 has a second point in frame 0"):
-        read_tracks(tmp_path / "branch.xml")
+    with pytest.warns(DataWarning, match="1 TrackMate track.s. split or merge"):
+        tracks = read_tracks(tmp_path / "branch.xml")
+    # Track 0 as it was; track 1 as three one-point branches in spot order: 200, 201 (frame 1), 300.
+    assert list(tracks.track_ids) == [0, 1, 2, 3] and tracks.present.sum() == 5
+    assert tracks.xy[1, 0].tolist() == [50, 60] and tracks.xy[2, 1].tolist() == [52, 61] and tracks.xy[3, 0].tolist() == [90, 90]
 
 
 def test_unknown_format_name(tmp_path):

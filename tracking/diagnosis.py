@@ -54,6 +54,9 @@ def _follower_state(result: Tracks, truth: Tracks, matched: np.ndarray, follower
         return UNMATCHED, "no result track within tolerance at its first point"
     result_column = column + truth.first_frame - result.first_frame
     if not 0 <= result_column < result.n_frames or not result.present[follower, result_column]:
+        later = np.flatnonzero(result.present[follower, max(result_column, 0):]) if result_column < result.n_frames else np.empty(0, int)
+        if later.size:
+            return UNMATCHED, f"its result track misses this frame (it goes on from frame {result.first_frame + max(result_column, 0) + int(later[0])})"
         return UNMATCHED, "its result track ends"
     other = matched[follower, result_column]
     if other == UNMATCHED:

@@ -423,8 +423,10 @@ def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig,
     free = np.setdiff1d(np.arange(backwards[0].shape[0]), links[:, 0])
     if not (config.restart_lost and free.size):
         return links
-    if config.d_max is None:
-        config = replace(config, d_max=link_speed_limit(tracks_from_assignment(list(frames), up)))
+    limit = link_speed_limit(tracks_from_assignment(list(frames), up)) if config.d_max is None else None
+    # A limit at or below the smallest speed (d_min) leaves no speed to link at.
+    if limit is not None and limit > config.d_min:
+        config = replace(config, d_max=limit)
     unused = np.setdiff1d(np.arange(backwards[1].shape[0]), links[:, 1])
     fresh = _initial_links([backwards[0][free], backwards[1][unused], *backwards[2:]], config)
     second = np.full(free.size, UNASSIGNED, dtype=links.dtype)

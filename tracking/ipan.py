@@ -29,6 +29,9 @@ from .motion import smooth_motion_cost
 from .tracks import Tracks, check_limit, point_frames, tracks_from_links
 
 FREE = -1
+# Speeds of the gap search's grid at most: 1 px/frame steps up to a v_max of 16 px/frame, as in
+# the authors' scenes; coarser beyond, so that the work stays bounded.
+_MAX_SPEEDS = 16
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,15 @@ class IPANConfig:
         Speed resolution of the gap search, pixels/frame (1).
     w1, w2 : float
         Weights of the direction and speed terms of the cost.
+    max_candidates : int
+        Each point considers at most this many of the nearest points within v_max in each
+        neighbouring frame. Hypotheses and competitors grow with the square of the candidates
+        and verification nests them, so on dense input with a loose v_max (no limit given, or
+        one estimated high) the work is bounded by this rather than by the whole frame; with
+        fewer candidates than this, as in the paper's scenes, it changes nothing.
+    max_gap_candidates : int
+        Post-processing tries each trajectory end with at most this many of the nearest starts
+        in each later frame within reach, for the same reason (each try searches a grid).
     """
 
     v_max: float
@@ -61,6 +73,8 @@ class IPANConfig:
     speed_step: float = 1.0
     w1: float = 0.1
     w2: float = 0.9
+    max_candidates: int = 8
+    max_gap_candidates: int = 3
 
     def __post_init__(self) -> None:
         check_limit("v_max", self.v_max, optional=False)
@@ -72,6 +86,8 @@ class IPANConfig:
             raise ValueError(f"max_gap must be 0, 1 or 2, got {self.max_gap}")
         if self.angle_step <= 0 or self.speed_step <= 0:
             raise ValueError("the gap search steps must be positive")
+        if min(self.max_candidates, self.max_gap_candidates) < 1:
+            raise ValueError("max_candidates and max_gap_candidates must be at least 1")
 
     def cost(self, a: np.ndarray, p: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Smooth-motion cost of triplets a -> p -> b, positions of shape (..., 2)."""
@@ -98,7 +114,11 @@ class _Linker:
             return [np.empty(0, np.int64) for _ in range(points.shape[0])]
         # A point moving at exactly v_max must be found despite rounding.
         radius = self.config.v_max * (1.0 + 1e-9)
-        return [np.asarray(sorted(f), dtype=np.int64) for f in tree.query_ball_point(points, radius)]
+        k = min(self.config.max_candidates, tree.n)
+        distance, index = tree.query(points, k=k, distance_upper_bound=radius)
+        index = np.asarray(index).reshape(points.shape[0], k)
+        found = np.isfinite(np.asarray(distance).reshape(points.shape[0], k))
+        return [np.sort(row[keep]).astype(np.int64) for row, keep in zip(index, found)]
 
     def starts(self, k: int, p: int) -> np.ndarray:
         """Points of frame k - 1 that point p of frame k may follow: its fixed predecessor, or
@@ -129,23 +149,27 @@ class _Linker:
     def competitors(self, k: int, a: int, p: int, b: int, cost: float) -> list[tuple[int, int, int, float]]:
         """Triplets cheaper than (a, p, b) that would take its b, or its a while a is free."""
         f0, f1, f2 = self.frames[k - 1], self.frames[k], self.frames[k + 1]
-        found: list[tuple[int, int, int, float]] = []
-        for q in self.behind[k + 1][b]:
-            if q == p or self.forward[k][q] != FREE:
-                continue
-            r = self.starts(k, q)
-            if r.size:
-                c = self.config.cost(f0[r], f1[q][None], f2[b][None])
-                found.extend((int(x), int(q), b, float(y)) for x, y in zip(r[c < cost], c[c < cost]))
+        # Every competing triplet of a kind is costed in one call: the calls, not the
+        # arithmetic, are what dense input multiplies.
+        takers = [q for q in self.behind[k + 1][b] if q != p and self.forward[k][q] == FREE]
+        r, q = self._pairs(takers, [self.starts(k, q) for q in takers])
+        c = self.config.cost(f0[r], f1[q], f2[b][None]) if r.size else np.empty(0)
+        cheaper = c < cost
+        found = [(int(x), int(y), b, float(z)) for x, y, z in zip(r[cheaper], q[cheaper], c[cheaper])]
         if self.backward[k][p] == FREE:
-            for q in self.ahead[k - 1][a]:
-                if q == p or self.forward[k][q] != FREE or self.backward[k][q] != FREE:
-                    continue
-                s = self.ends(k, q)
-                if s.size:
-                    c = self.config.cost(f0[a][None], f1[q][None], f2[s])
-                    found.extend((a, int(q), int(x), float(y)) for x, y in zip(s[c < cost], c[c < cost]))
+            followers = [q for q in self.ahead[k - 1][a] if q != p and self.forward[k][q] == FREE and self.backward[k][q] == FREE]
+            s, q = self._pairs(followers, [self.ends(k, q) for q in followers])
+            c = self.config.cost(f0[a][None], f1[q], f2[s]) if s.size else np.empty(0)
+            cheaper = c < cost
+            found.extend((a, int(y), int(x), float(z)) for x, y, z in zip(s[cheaper], q[cheaper], c[cheaper]))
         return found
+
+    @staticmethod
+    def _pairs(points: list[int], partners: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Each point's partners, flattened in order, beside the point they belong to."""
+        if not points:
+            return np.empty(0, np.int64), np.empty(0, np.int64)
+        return np.concatenate(partners).astype(np.int64), np.repeat(np.asarray(points, np.int64), [len(x) for x in partners])
 
     def accepted(self, k: int, a: int, p: int, b: int, cost: float, depth: int) -> bool:
         """True when no cheaper competitor survives verification one level shallower."""
@@ -167,11 +191,11 @@ class _Linker:
         return [(k, p, k + 1, int(q)) for k, f in enumerate(self.forward[:-1]) for p, q in enumerate(f) if q != FREE]
 
 
-def _speed_bounds(speed: float, delta_max: float, v_max: float) -> tuple[float, float]:
+def _speed_bounds(speed: np.ndarray, delta_max: float, v_max: float) -> tuple[np.ndarray, np.ndarray]:
     """Speeds whose unweighted Sethi-Jain speed term against ``speed`` stays within delta_max."""
     root = math.sqrt(delta_max * (2.0 - delta_max))
     scale = speed / (1.0 - delta_max) ** 2
-    return scale * (1.0 - root) ** 2, min(scale * (1.0 + root) ** 2, v_max)
+    return scale * (1.0 - root) ** 2, np.minimum(scale * (1.0 + root) ** 2, v_max)
 
 
 def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig) -> np.ndarray:
@@ -179,26 +203,30 @@ def _continuations(origin: np.ndarray, velocity: np.ndarray, config: IPANConfig)
 
     Directions within arccos(1 - delta_max) of the velocity's, in steps of ``angle_step``;
     speeds from the lowest that the delta_max limits allow up to the highest (capped at
-    v_max) in steps of ``speed_step``, the highest included. Returns shape (N, G, 2), NaN-padded.
+    v_max) in steps of ``speed_step`` (wider when that would give more than ``_MAX_SPEEDS``
+    speeds), the highest included. Returns shape (N, G, 2), NaN-padded.
     """
     half = math.degrees(math.acos(1.0 - config.delta_max))
     turns = np.radians(np.arange(-math.floor(half / config.angle_step), math.floor(half / config.angle_step) + 1)
                        * config.angle_step)
     speed = np.hypot(*velocity.T)
     heading = np.arctan2(velocity[:, 1], velocity[:, 0])
-    grids = []
-    for s in speed:
-        low, high = _speed_bounds(float(s), config.delta_max, config.v_max)
-        # From the slowest allowed speed up to the fastest, both included, so that points near
-        # standstill or near v_max have candidates too.
-        steps = low + config.speed_step * np.arange(max(math.floor((high - low) / config.speed_step) + 1, 0))
-        grids.append(np.append(steps, high) if steps.size and high - steps[-1] > 1e-9 else steps)
-    size = max((g.size for g in grids), default=0)
+    # From the slowest allowed speed up to the fastest, both included, so that points near
+    # standstill or near v_max have candidates too. A loose v_max would make the grid, and the
+    # pairs of it bridging two missing frames, grow without bound: past _MAX_SPEEDS speeds the
+    # step widens instead.
+    low, high = _speed_bounds(speed, config.delta_max, config.v_max)
+    step = np.maximum(config.speed_step, (high - low) / _MAX_SPEEDS)
+    count = np.maximum(np.floor((high - low) / step) + 1, 0).astype(np.int64)
+    last = low + step * (count - 1)
+    with_high = (count > 0) & (high - last > 1e-9)
+    size = int((count + with_high).max(initial=0))
     if size == 0:
         return np.empty((origin.shape[0], 0, 2))
-    speeds = np.full((len(grids), size), np.nan)
-    for row, grid in enumerate(grids):
-        speeds[row, : grid.size] = grid
+    column = np.arange(size)
+    speeds = np.where(column < count[:, None], low[:, None] + step[:, None] * column, np.nan)
+    rows = np.flatnonzero(with_high)
+    speeds[rows, count[rows]] = high[rows]
     angle = heading[:, None, None] + turns[None, :, None]
     step = np.stack((np.cos(angle) * speeds[:, None, :], np.sin(angle) * speeds[:, None, :]), axis=-1)
     return (origin[:, None, None, :] + step).reshape(origin.shape[0], -1, 2)
@@ -224,19 +252,26 @@ def bridge_cost(before: np.ndarray, end: np.ndarray, start: np.ndarray, after: n
         The mean cost over the bridged trajectory's triplets, ``inf`` when no grid point keeps
         every triplet below delta_max and reaches ``start`` within v_max.
     """
+    # Each triplet's test prunes the grid before the next is built: the same minimum as testing
+    # every path of the grid, at a fraction of the work when two frames are missing.
     missing = _continuations(end[None], (end - before)[None], config)[0]  # (G, 2)
-    chain = [before, end, missing]
+    first = config.cost(before[None], end[None], missing)
+    keep = ~np.isnan(missing[:, 0]) & (first < config.delta_max)
+    missing, costs = missing[keep], [first[keep]]
+    last, previous = missing, np.broadcast_to(end, missing.shape)
     if gap == 2:
         second = _continuations(missing, missing - end[None], config)  # (G, H, 2)
-        chain = [before, end, missing[:, None], second]
-    chain += [start, after]
-    shape = chain[-3].shape
-    chain = [np.broadcast_to(point, shape) for point in chain]
-    cost = np.stack([config.cost(*chain[i : i + 3]) for i in range(len(chain) - 2)])
-    last = chain[-3]
-    reach = np.hypot(*(start - last).reshape(-1, 2).T).reshape(shape[:-1]) <= config.v_max
-    valid = reach & ~np.isnan(last[..., 0]) & (cost < config.delta_max).all(axis=0)
-    return float(cost.mean(axis=0)[valid].min()) if valid.any() else math.inf
+        cost = config.cost(end[None, None], missing[:, None], second)
+        keep = ~np.isnan(second[..., 0]) & (cost < config.delta_max)
+        rows, columns = np.nonzero(keep)
+        costs = [costs[0][rows], cost[rows, columns]]
+        last, previous = second[rows, columns], missing[rows]
+    reach = np.hypot(*(start[None] - last).T) <= config.v_max
+    costs = [c[reach] for c in costs]
+    last, previous = last[reach], previous[reach]
+    costs += [config.cost(previous, last, start[None]), config.cost(last, start[None], after[None])]
+    valid = (costs[-2] < config.delta_max) & (costs[-1] < config.delta_max)
+    return float((sum(costs) / len(costs))[valid].min()) if valid.any() else math.inf
 
 
 def close_gaps(frames: list[np.ndarray], links: list[tuple[int, int, int, int]], config: IPANConfig
@@ -244,25 +279,30 @@ def close_gaps(frames: list[np.ndarray], links: list[tuple[int, int, int, int]],
     """Links that join trajectory ends to later starts across up to ``max_gap`` missing frames.
 
     Only an end with an incoming link and a start with an outgoing link have the velocities the
-    search needs. Candidate joins are taken smoothest first, each end and start at most once.
+    search needs. Each end is tried with the ``max_gap_candidates`` nearest starts of each later
+    frame within reach. Candidate joins are taken smoothest first, each end and start at most once.
     """
     successor = {(k, p): (j, q) for k, p, j, q in links}
     predecessor = {(j, q): (k, p) for k, p, j, q in links}
     ends = [key for key in predecessor if key not in successor]
-    starts = [key for key in successor if key not in predecessor]
+    starts_in: dict[int, list[tuple[int, int]]] = {}
+    for key in sorted(key for key in successor if key not in predecessor):
+        starts_in.setdefault(key[0], []).append(key)
     candidates = []
     for end in ends:
-        for start in starts:
-            gap = start[0] - end[0] - 1
-            if not 1 <= gap <= config.max_gap:
+        e = frames[end[0]][end[1]]
+        for gap in range(1, config.max_gap + 1):
+            starts = starts_in.get(end[0] + gap + 1, [])
+            if not starts:
                 continue
-            e, s = frames[end[0]][end[1]], frames[start[0]][start[1]]
-            if math.hypot(*(s - e)) > (gap + 1) * config.v_max:
-                continue
-            b, a = predecessor[end], successor[start]
-            cost = bridge_cost(frames[b[0]][b[1]], e, s, frames[a[0]][a[1]], gap, config)
-            if math.isfinite(cost):
-                candidates.append((cost, end, start))
+            distance = np.hypot(*(np.array([frames[k][q] for k, q in starts]) - e).T)
+            near = np.argsort(distance, kind="stable")[: config.max_gap_candidates]
+            for start in (starts[i] for i in near if distance[i] <= (gap + 1) * config.v_max):
+                b, a = predecessor[end], successor[start]
+                s = frames[start[0]][start[1]]
+                cost = bridge_cost(frames[b[0]][b[1]], e, s, frames[a[0]][a[1]], gap, config)
+                if math.isfinite(cost):
+                    candidates.append((cost, end, start))
     joined, used = [], set()
     for cost, end, start in sorted(candidates):
         if end not in used and start not in used:

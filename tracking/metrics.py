@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .tracks import Tracks
 
@@ -64,6 +63,10 @@ def match_frame(found: np.ndarray, true: np.ndarray, tolerance: float) -> tuple[
     """
     if len(found) == 0 or len(true) == 0:
         return np.empty(0, int), np.empty(0, int)
+    # scipy.optimize loads all of its solvers (about 0.6 s): paid here, when points are
+    # matched, not by every import of the metrics.
+    from scipy.optimize import linear_sum_assignment
+
     distance = np.hypot(found[:, None, 0] - true[None, :, 0], found[:, None, 1] - true[None, :, 1])
     # Pairs beyond the tolerance must never be chosen, and a finite stand-in keeps the
     # problem feasible; any pair beyond it is discarded afterwards.

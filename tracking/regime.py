@@ -329,8 +329,8 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     first links, and the drift is to be removed from the positions before tracking
     (:func:`track_without_drift`), so that a track bridging a gap of g frames is looked for g
     drift steps downstream. Without a speed limit in ``config`` it also takes the estimated one,
-    5 sigma of the noise about the drift; a limit in ``config`` bounds the steps about the drift
-    too. Smooth motion leaves ``config`` as is.
+    5 sigma of the noise about the drift, unless that is not above ``config.d_min``; a limit in
+    ``config`` bounds the steps about the drift too. Smooth motion leaves ``config`` as is.
 
     Returns
     -------
@@ -343,7 +343,9 @@ def fit_motion(config: GOAConfig, choice: MotionChoice, keep_model: bool = False
     changes: dict = {"initialisation": "im1"}
     if not keep_model:
         changes["individual"] = IndividualModel("im1", power=2)
-    if config.d_max is None and choice.speed_limit is not None:
+    # An estimate at or below the user's smallest speed (d_min) would leave no speed to track:
+    # what the user set wins, and the steps go unbounded.
+    if config.d_max is None and choice.speed_limit is not None and choice.speed_limit > config.d_min:
         changes["d_max"] = choice.speed_limit
     return replace(config, **changes), choice.drift
 

@@ -21,7 +21,6 @@ from ..errors import UsageError
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "annotate",
-        help="make or fix ground truth by pointing, in a local web page",
         description="Serve a page on this machine that shows INPUT with TRACKS (or no tracks, to track by hand) "
         "and turns clicks into edits: select a track, click the point it should have (a link, a swap from that "
         "frame on, a moved or added point), split, delete, undo, and jump to the places the tracker was least "

@@ -27,7 +27,6 @@ CONNECT_TIMEOUT = "10s"
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "batch",
-        help="run many clips, on this machine or a Dask cluster",
         description="Run each INPUT as `seedtrack run` does, into DIR/<clip name>/ (the same files, byte for byte), "
         "spread over the workers of a Dask cluster: a local one started here unless --scheduler names a running one. "
         "DIR/batch.csv lists input, status (done, failed, skipped), frames, tracks, seconds and the error of a failure. "

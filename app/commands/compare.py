@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,6 @@ DEFAULT_TOLERANCE = 3.0
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "compare",
-        help="draw two track sets over the clip, where they disagree in a warning colour",
         description="Draw track sets A and B (truth and result, or two trackers; any track format) over INPUT, side by "
         "side or overlaid. Points of the two sets are matched frame by frame within --tol; a link of one set "
         "(a point to the same track's next point) disagrees with the other set when its two points are not matched to one and the same "
@@ -73,8 +73,8 @@ def _short_name(path: Path, other: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
-    if not args.tol > 0:
-        raise UsageError(f"--tol must be > 0, got {args.tol:g}")
+    if not (args.tol > 0 and math.isfinite(args.tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
     a = read_tracks(args.a, args.format_a)
     b = read_tracks(args.b, args.format_b)
     warnings_a = disagreeing_links(a, b, args.tol)

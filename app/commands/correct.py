@@ -15,7 +15,6 @@ from ..wording import counted
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "correct",
-        help="apply hand edits to tracks, to make ground truth",
         description="Apply the edits in EDITS.txt (one a line: join A B FRAME, swap A B FRAME, split A FRAME "
         "[NEW_ID], delete A [FRAME], move A FRAME X Y, add A FRAME X Y; # comments) to TRACKS and write the "
         "result. Every line is checked; on any error nothing is written.",

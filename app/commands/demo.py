@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from seedtrack.data.atomic import output_folder
@@ -10,7 +11,7 @@ from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.trackfile import read_tracks
 from seedtrack.tracking.evaluation import evaluate_tracks
 
-from ..errors import UsageError
+from ..errors import UsageError, in_option_names
 from ..pipeline import DetectionSettings, run_pipeline
 from .run import add_tracker_options, tracking_settings
 
@@ -19,7 +20,6 @@ def add_parser(subparsers) -> None:
     defaults = DishSpec()
     parser = subparsers.add_parser(
         "demo",
-        help="generate a rotating-dish clip, track it and score the tracks against the truth",
         description="Generate a synthetic rotating-dish clip with known truth (DIR/clip.mp4, DIR/truth.csv), "
         "run the same pipeline as 'seedtrack run' on it, and print the track error.",
     )
@@ -38,8 +38,18 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run)
 
 
+# Fewer frames than this open no track: a track opens on three measured frames in a row.
+_MIN_FRAMES = 3
+
+
 def run(args: argparse.Namespace) -> int:
     tracking = tracking_settings(args)
+    if not (args.tol > 0 and math.isfinite(args.tol)):
+        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
+    if args.seeds < 1:
+        raise UsageError(f"--seeds must be at least 1, got {args.seeds}")
+    if args.frames < _MIN_FRAMES:
+        raise UsageError(f"--frames must be at least {_MIN_FRAMES} (a track opens on three frames in a row), got {args.frames}")
     try:
         spec = DishSpec(
             seeds=args.seeds,
@@ -49,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
             hidden_probability=args.hidden_probability,
         )
     except ValueError as error:
-        raise UsageError(str(error)) from None
+        raise UsageError(in_option_names(str(error), ("seeds", "frames", "rim_speed", "random_seed", "hidden_probability"))) from None
     with output_folder(args.out):
         scene = write_dish_clip(spec, args.out)
         run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), tracking)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 from pathlib import Path
 
@@ -14,14 +15,14 @@ import cv2
 import numpy as np
 
 from seedtrack.data.atomic import atomic_path, check_target
-from seedtrack.data.csvio import write_table
+from seedtrack.data.csvio import check_table_name, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import IMAGE_SUFFIXES
 from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
 from seedtrack.detection.choice import describe
 from seedtrack.detection.roi import Circle
 
-from ..errors import UsageError, option_name, output_file
+from ..errors import UsageError, in_option_names, output_file
 from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
@@ -130,7 +131,7 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             split=args.split,
         )
     except ValueError as error:
-        raise UsageError(_in_option_names(str(error))) from None
+        raise UsageError(in_option_names(str(error), (f.name for f in dataclasses.fields(BlobOptions)))) from None
     for name in ("start", "end", "step"):
         value = getattr(args, name)
         if value is not None and value < (1 if name == "step" else 0):
@@ -138,15 +139,6 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
     if args.end is not None and args.end <= args.start:
         raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
     return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step)
-
-
-# BlobOptions names its fields in its errors; a user knows the options. Longest names first, so
-# that background_size is not read as background.
-_FIELDS = re.compile(r"\b(" + "|".join(sorted((f.name for f in dataclasses.fields(BlobOptions)), key=len, reverse=True)) + r")\b")
-
-
-def _in_option_names(message: str) -> str:
-    return _FIELDS.sub(lambda match: option_name(match.group(1)), message)
 
 
 def _roi(text: str) -> str | Circle | Path:
@@ -159,6 +151,8 @@ def _roi(text: str) -> str | Circle | Path:
             raise UsageError(f"--roi circle needs finite X,Y and a radius > 0, got {text!r}")
         return Circle(x, y, r)
     if not Path(text).is_file():
+        if Path(text).suffix.lower() in IMAGE_SUFFIXES or "/" in text or os.sep in text:
+            raise UsageError(f"--roi {text}: no such mask image file")
         raise UsageError(f"--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; {text!r} is none of these")
     return Path(text)
 
@@ -209,7 +203,6 @@ def preview_caption(choice, settings: DetectionSettings) -> str:
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "detect",
-        help="measure objects in every frame (detections.csv), with a preview image to tune the options",
         description="Find objects in every frame of INPUT and write OUT (CSV: frame,x,y,area,mean_intensity,"
         "eccentricity; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates). "
         "--preview draws what was found and the region of interest on one frame.",
@@ -232,6 +225,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.preview_frame is not None:
         raise UsageError("--preview-frame needs --preview PNG")
     # Found out now rather than after a long clip has been read.
+    check_table_name(args.out)
     for target in (args.out, args.preview):
         if target is not None:
             check_target(target)

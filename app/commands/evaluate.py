@@ -32,7 +32,6 @@ _WELL_MATCHED = 0.9
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "evaluate",
-        help="score tracks against ground truth",
         description="Match result points to true points frame by frame (one to one, within --tol, by optimal "
         "assignment) and report the paper's strict track error, relaxed trajectory merit and link error, and "
         "ID switches, fragmentations, MOTA, MOTP and IDF1 as py-motmetrics computes them. With --out, also "

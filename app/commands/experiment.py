@@ -23,7 +23,6 @@ DEFAULT_RUNS = 100
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "experiment",
-        help="rerun one of the paper's PSMG experiments with every tracker",
         description="Generate PSMG data, run every tracker (and trackpy/laptrack when installed) on it, and "
         "write DIR/NAME.csv (one row per run and tracker), DIR/NAME-summary.csv (means with 95% intervals) "
         "and DIR/NAME.png. Experiments: " + ", ".join(f"{e.name} ({e.title})" for e in EXPERIMENTS.values()) + ".",

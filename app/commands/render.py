@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import read_table
+from seedtrack.data.csvio import read_points
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames
 from seedtrack.data.trackfile import FORMATS, read_tracks
@@ -21,6 +21,8 @@ from ..drawing import FalseDetections, TrackLayer, View, annotate_frames, summar
 from ..wording import counted
 
 DEFAULT_TRAIL = 10
+# Beyond what any player shows, or GIF's 1/100 s frame delays can hold.
+_MAX_FPS = 1000
 
 
 def add_view_options(parser: argparse.ArgumentParser, out_required: bool) -> None:
@@ -48,7 +50,6 @@ def add_view_options(parser: argparse.ArgumentParser, out_required: bool) -> Non
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "render",
-        help="draw tracks over the clip: an MP4, a GIF, a PNG or a folder of PNGs",
         description="Draw each track over INPUT in its own colour (the same on every run): a fading trail, the id "
         "beside the head, interpolated positions hollow, starts and ends marked, detections that no track holds "
         "crossed out (with --detections), a legend and the frame number.",
@@ -74,10 +75,16 @@ def check_view_options(args: argparse.Namespace) -> str | None:
     """
     if args.out is None and getattr(args, "summary", None) is None:
         raise UsageError("give --out or --summary")  # compare requires --out; only render gets here
+    for name in ("start", "end", "frame"):
+        value = getattr(args, name)
+        if value is not None and value < 0:
+            raise UsageError(f"--{name} must be a 0-based frame index >= 0, got {value}")
+    if args.step < 1:
+        raise UsageError(f"--step must be at least 1, got {args.step}")
     if args.trail < 0:
         raise UsageError(f"--trail must be >= 0, got {args.trail}")
-    if args.fps is not None and not args.fps > 0:
-        raise UsageError(f"--fps must be > 0, got {args.fps:g}")
+    if args.fps is not None and not 0 < args.fps <= _MAX_FPS:
+        raise UsageError(f"--fps must be above 0 and at most {_MAX_FPS} frames per second, got {args.fps:g}")
     kind = output_kind(args.out) if args.out is not None else None
     if args.frame is not None and kind != "png":
         raise UsageError("--frame chooses the frame of a .png output; use --start/--end/--step for clips")
@@ -95,7 +102,7 @@ def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tupl
     Raises
     ------
     DataError
-        If the input cannot be read, or a track set has frames past its end.
+        If the input cannot be read, or a track set does not fit it (see :func:`check_fits`).
     """
     for path, tracks in track_sets:
         if tracks.n_frames == 0:
@@ -113,22 +120,66 @@ def open_range(args: argparse.Namespace, kind: str | None, track_sets: list[tupl
         source = open_frames(args.input, start=frame, end=frame + 1)
     else:
         source = open_frames(args.input, start=args.start, end=args.end, step=args.step)
-    length = source.clip_length
-    for (path, tracks), last in zip(track_sets, last_frames):
-        if length is not None and last >= length:
-            source.close()
-            raise DataError(
-                path,
-                f"frames {tracks.first_frame}..{last} lie outside the video {args.input} (frames 0..{length - 1}); "
-                "are these the tracks of this clip?",
-            )
+    try:
+        for path, tracks in track_sets:
+            rows = tracks.to_rows()
+            check_fits(path, rows["frame"], rows["x"], rows["y"], source, args.input)
+    except BaseException:
+        source.close()
+        raise
     return source
+
+
+# A point this far outside the frame, as a share of the frame's larger side, is not of this clip.
+_OUTSIDE_SHARE = 0.1
+
+
+def check_fits(path: Path, frame, x, y, source: FrameSource, clip: Path, what: str = "tracks") -> None:
+    """Refuse points (of tracks or detections) that cannot be of the clip: a frame past its end,
+    or a position well outside its frames.
+
+    Parameters
+    ----------
+    path : Path
+        The points' file, for the message.
+    frame, x, y : ndarray
+        0-based frame index and position (pixels) of each point.
+    source : FrameSource
+        The clip, opened; its length may be unknown (a stream), and then only the size is checked.
+    clip : Path
+        The clip's name, for the message.
+    what : str
+        What the points are, for the message.
+
+    Raises
+    ------
+    DataError
+        Naming both files and what does not fit.
+    """
+    if len(frame) == 0:
+        return
+    length = source.clip_length
+    if length is not None and int(max(frame)) >= length:
+        raise DataError(
+            path,
+            f"frames {int(min(frame))}..{int(max(frame))} lie outside the video {clip} (frames 0..{length - 1}); are these the {what} of this clip?",
+        )
+    width, height = source.size
+    margin = _OUTSIDE_SHARE * max(width, height)
+    outside = (x < -0.5 - margin) | (x > width - 0.5 + margin) | (y < -0.5 - margin) | (y > height - 0.5 + margin)
+    if outside.any():
+        i = int(np.flatnonzero(outside)[0])
+        raise DataError(
+            path,
+            f"{int(outside.sum())} point(s) lie well outside the {width}x{height} frames of {clip} (first: frame {int(frame[i])} at "
+            f"x={float(x[i]):.1f}, y={float(y[i]):.1f}); are these the {what} of this clip?",
+        )
 
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
     tracks = read_tracks(args.tracks, args.format)
-    detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
+    detections = read_points(args.detections) if args.detections is not None else None
     print(draw(args, kind, tracks, detections))
     return 0
 
@@ -155,6 +206,7 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
             return f"wrote {args.summary}"
         false = None
         if detections is not None:
+            check_fits(args.detections, detections["frame"], detections["x"], detections["y"], source, args.input, "detections")
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
         frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(false is not None))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)

@@ -13,6 +13,7 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..progress import progress_bar
 from ..review import draw_review_page
+from .render import check_fits
 from ..wording import counted
 
 DEFAULT_EVERY = 5
@@ -21,7 +22,6 @@ DEFAULT_EVERY = 5
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "review",
-        help="draw track ids on frames, to write corrections from",
         description="Write DIR/review_FFFFFF.png for every Nth frame of INPUT (and the last frame of the tracks): "
         "the frame enlarged, each track's position, recent path and id in large print.",
     )
@@ -40,8 +40,12 @@ def run(args: argparse.Namespace) -> int:
     last = tracks.first_frame + tracks.n_frames - 1
     wanted = set(range(tracks.first_frame, last + 1, args.every)) | {last}
     written = 0
-    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source, output_folder(args.out):
-        with progress_bar(source.frame_count, "review") as bar:
+    with open_frames(args.input) as whole:
+        rows = tracks.to_rows()
+        # Before the output folder exists: another clip's tracks leave nothing behind.
+        check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], whole, args.input)
+    with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
+        with output_folder(args.out), progress_bar(source.frame_count, "review") as bar:
             for index, image in source:
                 if index in wanted:
                     page = draw_review_page(image, tracks, index - tracks.first_frame, index)

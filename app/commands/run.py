@@ -6,6 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
+from seedtrack.data.numbers import MAX_COORDINATE_PX
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.regime import MOTIONS
@@ -69,6 +70,14 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+# The largest value of a limit that still limits, and why.
+_LARGEST = {
+    "phi_max": (1.1, "IM2's smoothness cost lies in 0..1.1; a larger limit admits every link"),
+    "max_speed": (MAX_COORDINATE_PX, "no point moves farther than the largest coordinate read"),
+    "min_speed": (MAX_COORDINATE_PX, "no point moves farther than the largest coordinate read"),
+}
+
+
 def check_limits(args: argparse.Namespace, positive: tuple[str, ...] = ("max_speed", "phi_max"), non_negative: tuple[str, ...] = ()) -> None:
     """Refuse a tracker limit given that is not a finite number above zero (``positive``) or at
     least zero (``non_negative``).
@@ -83,6 +92,9 @@ def check_limits(args: argparse.Namespace, positive: tuple[str, ...] = ("max_spe
             value = getattr(args, option)
             if value is not None and not (math.isfinite(value) and allowed(value)):
                 raise UsageError(f"{option_name(option)} must be {kind} finite number, got {value:g}")
+            if value is not None and option in _LARGEST and value > _LARGEST[option][0]:
+                largest, why = _LARGEST[option]
+                raise UsageError(f"{option_name(option)} must be at most {largest:g} ({why}), got {value:g}")
 
 
 def tracker_config(args: argparse.Namespace) -> GOAConfig:
@@ -168,7 +180,6 @@ def workers_count(args: argparse.Namespace) -> int:
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run",
-        help="detect, track and draw a clip",
         description="Detect blobs in every frame of INPUT, link them into tracks with GOA-updown (tracks open "
         "and end anywhere in the clip unless --fixed-count), and write DIR/detections.csv, DIR/tracks.csv and "
         "DIR/overlay.mp4.",

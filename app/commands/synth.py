@@ -10,6 +10,7 @@ import numpy as np
 
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
+from seedtrack.data.numbers import MAX_COORDINATE_PX
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.trackfile import write_tracks
 
@@ -32,7 +33,6 @@ _FLOAT_OPTIONS = {
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "synth",
-        help="generate synthetic points with ground truth",
         description="Generate synthetic data with known truth, to test trackers on.",
     )
     kinds = parser.add_subparsers(dest="kind", required=True, metavar="KIND")
@@ -78,6 +78,9 @@ def psmg_spec(args: argparse.Namespace) -> PSMGSpec:
     for name, value in values.items():
         if not math.isfinite(value):
             raise UsageError(f"{option_name(name)} must be a finite number, got {value:g}")
+    if values["size"] > MAX_COORDINATE_PX:
+        # Every reader refuses positions beyond this: points.csv would be unreadable.
+        raise UsageError(f"--size must be at most {MAX_COORDINATE_PX:g} pixels, got {values['size']:g}")
     if args.max_speed is not None and not args.max_speed > 0:
         raise UsageError(f"--max-speed must be positive, got {args.max_speed:g}")
     if args.tracks < 1 or args.frames < 2:

@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
-from seedtrack.data.csvio import read_table, write_table
+from seedtrack.data.csvio import read_points as read_points_table
+from seedtrack.data.csvio import read_table
+from seedtrack.data.trackfile import output_format, write_rows
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import GOA_FAMILY
@@ -82,12 +84,11 @@ column, or a value that is not a finite number is an error (exit 2, nothing writ
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "track",
-        help="link measured points (frame,x,y) into tracks",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks (CSV)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge) or .xml (TrackMate)")
     parser.add_argument(
         "--algorithm",
         choices=("goa", *TRACKERS),
@@ -127,7 +128,7 @@ def add_parser(subparsers) -> None:
 
 def read_points(path: Path) -> Points:
     """Read POINTS.csv and group its points by frame (see :func:`group_points`)."""
-    return group_points(read_table(path, required=POINT_COLUMNS, integer=("frame",), others_as_text=True), path)
+    return group_points(read_points_table(path, others_as_text=True), path)
 
 
 # A given first link's point must lie this close to a measured point, pixels.
@@ -236,11 +237,13 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
 
 def run(args: argparse.Namespace) -> int:
     check_options(args)
-    check_target(args.out)  # now rather than after a long tracking run
+    # Now rather than after a long tracking run.
+    check_target(args.out)
+    output_format(args.out)
     points = read_points(args.points)
     tracks = track_points(points, args)
     rows = track_rows(points, tracks)
-    write_table(args.out, rows)
+    write_rows(args.out, rows)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
     print(
         f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "

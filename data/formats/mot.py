@@ -19,7 +19,8 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..csvio import text_lines
-from ..errors import DataError
+from ..errors import DataError, check_file
+from ..numbers import check_range
 from .rows import Rows
 
 _SEPARATOR = re.compile(r"[,\s]+")
@@ -29,8 +30,7 @@ _FIELDS = 6
 def read(path) -> Rows:
     """Rows of a MOTChallenge file (blank lines and lines starting with ``#`` are skipped)."""
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     values, lines = [], []
     for number, text in text_lines(path):
         text = text.strip()
@@ -43,18 +43,23 @@ def read(path) -> Rows:
             numbers = [float(field) for field in fields[:_FIELDS]]
         except ValueError:
             raise DataError(path, f"line {number}: a field of frame,id,bb_left,bb_top,bb_width,bb_height is not a number") from None
-        if numbers[0] != round(numbers[0]) or numbers[1] != round(numbers[1]):
-            raise DataError(path, f"line {number}: frame and id must be whole numbers")
         values.append(numbers)
         lines.append(number)
     table = np.array(values, dtype=float).reshape(-1, _FIELDS)
-    frame = table[:, 0].astype(np.int64)
-    early = np.flatnonzero(frame < 1)
+    line = np.array(lines, dtype=np.int64)
+    whole = (table[:, :2] == np.round(table[:, :2])) | ~np.isfinite(table[:, :2])
+    if not whole.all():
+        raise DataError(path, f"line {line[np.flatnonzero(~whole.all(axis=1))[0]]}: frame and id must be whole numbers")
+    early = np.flatnonzero(table[:, 0] < 1)
     if early.size:
-        raise DataError(path, f"line {lines[early[0]]}: frame {frame[early[0]]}; MOTChallenge frames count from 1")
+        raise DataError(path, f"line {line[early[0]]}: frame {table[early[0], 0]:g}; MOTChallenge frames count from 1")
+    # Checked as floats, before they become integers: the 0-based frame, the id and the box.
+    for name, column in (("frame", table[:, 0] - 1), ("track_id", table[:, 1]), ("x", table[:, 2]), ("y", table[:, 3]), ("x", table[:, 4]), ("y", table[:, 5])):
+        check_range(path, name, column, line)
+    frame = table[:, 0].astype(np.int64)
     x = table[:, 2] + table[:, 4] / 2
     y = table[:, 3] + table[:, 5] / 2
-    return Rows(table[:, 1].astype(np.int64), frame - 1, x, y, np.array(lines, dtype=np.int64))
+    return Rows(table[:, 1].astype(np.int64), frame - 1, x, y, line)
 
 
 def write(path, rows: dict[str, np.ndarray]) -> None:

@@ -6,8 +6,10 @@ pixels (TrackMate writes calibrated units when the image is calibrated; the mode
 (``SPOT_SOURCE_ID``, ``SPOT_TARGET_ID``) join, under its ``TRACK_ID``. When the file lists
 ``FilteredTracks``, only those tracks are read, as TrackMate shows them. Spots on no track
 (unlinked detections) are not tracks and are skipped, so a track of a single point cannot be
-stored in this format: the writer leaves such tracks out. A track that splits or merges has two
-spots in one frame and is rejected.
+stored in this format: the writer leaves such tracks out. A track that splits or merges (a cell
+dividing; TrackMate's own FakeTracks example) is read as its branches: each unbranched run of
+spots is a track of its own, the first keeping the TrackMate id and the others numbered after
+the file's largest id, with a warning that says how many tracks branched.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, warn
 from .rows import Rows
 from .xmltree import number, parse_xml, write_xml
 
@@ -33,20 +35,30 @@ def read(path) -> Rows:
         spots[spot_id] = (int(number(path, spot, "FRAME", whole=True)), number(path, spot, "POSITION_X"), number(path, spot, "POSITION_Y"), spot.line)
     shown = model.find("FilteredTracks")
     keep = None if shown is None else {int(number(path, t, "TRACK_ID", whole=True)) for t in shown.iter("TrackID")}
-    rows = []
+    tracks = []
     all_tracks = model.find("AllTracks")
     for track in all_tracks.iter("Track") if all_tracks is not None else ():
         track_id = int(number(path, track, "TRACK_ID", whole=True))
         if keep is not None and track_id not in keep:
             continue
-        members = set()
+        edges = []
         for edge in track.iter("Edge"):
-            for end in ("SPOT_SOURCE_ID", "SPOT_TARGET_ID"):
-                spot_id = int(number(path, edge, end, whole=True))
+            ends = [int(number(path, edge, end, whole=True)) for end in ("SPOT_SOURCE_ID", "SPOT_TARGET_ID")]
+            for spot_id in ends:
                 if spot_id not in spots:
                     raise DataError(path, f"line {edge.line}: edge names spot {spot_id}, which is not in AllSpots")
-                members.add(spot_id)
-        rows.extend((track_id, *spots[spot_id]) for spot_id in sorted(members))
+            edges.append(sorted(ends, key=lambda spot_id: spots[spot_id][0]))  # earlier frame first
+        tracks.append((track_id, _branches(edges)))
+    rows, branched = [], 0
+    next_id = max((track_id for track_id, _ in tracks), default=-1) + 1
+    for track_id, branches in tracks:
+        branched += len(branches) > 1
+        for number_in_track, branch in enumerate(branches):
+            segment_id = track_id if number_in_track == 0 else next_id
+            next_id += number_in_track > 0
+            rows.extend((segment_id, *spots[spot_id]) for spot_id in branch)
+    if branched:
+        warn(path, f"{branched} TrackMate track(s) split or merge; each unbranched part is read as a track of its own")
     table = np.array(rows, dtype=float).reshape(-1, 5)
     return Rows(table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3], table[:, 4].astype(np.int64))
 
@@ -91,3 +103,27 @@ def write(path, rows: dict[str, np.ndarray]) -> None:
             ET.SubElement(track, "Edge", SPOT_SOURCE_ID=str(spot_id[source]), SPOT_TARGET_ID=str(spot_id[target]), EDGE_TIME=f"{rows['frame'][source] + 0.5}")
         ET.SubElement(filtered, "TrackID", TRACK_ID=str(track_id))
     write_xml(path, root)
+
+
+def _branches(edges: list[list[int]]) -> list[list[int]]:
+    """The unbranched runs of spots of one track, from its (earlier, later) edges: a run ends
+    where a spot has other than one successor, or its successor other than one predecessor."""
+    after: dict[int, list[int]] = {}
+    before: dict[int, list[int]] = {}
+    for source, target in edges:
+        after.setdefault(source, []).append(target)
+        before.setdefault(target, []).append(source)
+        after.setdefault(target, [])
+        before.setdefault(source, [])
+
+    def continues(spot: int) -> bool:
+        return len(after[spot]) == 1 and len(before[after[spot][0]]) == 1
+
+    heads = [spot for spot in sorted(after) if len(before[spot]) != 1 or not continues(before[spot][0])]
+    branches = []
+    for spot in heads:
+        branch = [spot]
+        while continues(branch[-1]):
+            branch.append(after[branch[-1]][0])
+        branches.append(branch)
+    return branches

@@ -7,9 +7,11 @@ has no notion of an interpolated point, so every row reads as measured.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
-from ..csvio import read_table, write_table
+from ..csvio import data_lines, read_table, write_table
 from .rows import Rows
 
 REQUIRED = ("frame", "particle", "x", "y")
@@ -18,7 +20,7 @@ REQUIRED = ("frame", "particle", "x", "y")
 def read(path) -> Rows:
     """Rows of a trackpy table (``particle`` is the track id)."""
     table = read_table(path, required=REQUIRED, integer=("frame", "particle"))
-    lines = np.arange(table["frame"].size) + 2
+    lines = partial(data_lines, path)  # read again only for an error message
     return Rows(table["particle"], table["frame"], table["x"], table["y"], lines)
 
 

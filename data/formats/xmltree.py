@@ -6,13 +6,14 @@ through this and write with ``xml.etree``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 import xml.etree.ElementTree as ET
 from xml.parsers import expat
 
 from ..atomic import atomic_path
-from ..errors import DataError
+from ..errors import DataError, check_file
 
 
 @dataclass
@@ -45,8 +46,7 @@ def parse_xml(path) -> Element:
         If the file is missing or is not well-formed XML (naming the line and column).
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     parser = expat.ParserCreate()
     stack: list[Element] = []
     roots: list[Element] = []
@@ -78,8 +78,7 @@ def root_tag(path) -> tuple[str, int]:
         If the file is missing, or is malformed or ends before the root element.
     """
     path = Path(path)
-    if not path.is_file():
-        raise DataError(path, "no such file")
+    check_file(path)
     parser = expat.ParserCreate()
     found: list[tuple[str, int]] = []
     parser.StartElementHandler = lambda tag, attrib: found.append((tag, parser.CurrentLineNumber)) if not found else None
@@ -110,6 +109,8 @@ def number(path, element: Element, name: str, whole: bool = False) -> float:
         value = float(text)
     except ValueError:
         raise DataError(path, f"line {element.line}: {name}={text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise DataError(path, f"line {element.line}: {name}={text!r} is not a finite number")
     if whole and value != round(value):
         raise DataError(path, f"line {element.line}: {name}={text!r} is not a whole number")
     return value
