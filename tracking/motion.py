@@ -7,6 +7,7 @@ Costs are computed for a whole frame's candidate pairs at once, as flat arrays.
 
 from __future__ import annotations
 
+import abc
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -198,7 +199,7 @@ def proximal_uniformity_cost(candidates: Candidates) -> np.ndarray:
     return cost
 
 
-class _Registered:
+class _Registered(abc.ABC):
     """Models built by name: ``Base(name, **parameters)`` makes the registered model of that name.
 
     Each concrete model is a frozen dataclass whose first field is its ``name``; subclassing a
@@ -253,6 +254,7 @@ class IndividualModel(_Registered):
     # 1 for models that need only the head position, 2 for those that need a velocity.
     order: ClassVar[int] = 2
 
+    @abc.abstractmethod
     def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
         """Individual cost of every candidate pair.
 
@@ -267,7 +269,6 @@ class IndividualModel(_Registered):
         d_max : float
             Speed that maps to cost phi_max under IM1, pixels/frame (:meth:`SpeedLimits.scale`).
         """
-        raise NotImplementedError
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can pass the phi_max test, pixels/frame.
@@ -383,6 +384,7 @@ class CombinedModel(_Registered):
         """Weight of a slave (missed point) or a false track (spurious measurement)."""
         return phi_max
 
+    @abc.abstractmethod
     def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
         """Assignment weight of each pair that survived pruning.
 
@@ -393,7 +395,6 @@ class CombinedModel(_Registered):
         head, measurement : ndarray of int, shape (P,)
             The pairs' head and measurement indices (CM2 averages over each one's other pairs).
         """
-        raise NotImplementedError
 
 
 @dataclass(frozen=True)
