@@ -20,9 +20,9 @@ from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
-from ..pipeline import POINT_COLUMNS, Points, group_points, point_rows, track_frames
+from ..points import POINT_COLUMNS, Points, group_points, point_rows, track_frames
 from ..wording import counted
-from .run import add_tracker_options, check_limits, lifecycle_config, tracking_settings
+from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
 
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
 FIRST_LINKS = {
