@@ -128,8 +128,9 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
     about = velocities - drift
     spread = float(np.sqrt(np.median(np.einsum("ij,ij->i", about, about)) / (2.0 * np.log(2.0))))
     # Chains in place, so that a million of them hold no more copies than the fit needs.
+    del about, start, link, measured
     b_all, a_all = velocities[chained], velocities[np.flatnonzero(chained) + 1]
-    del velocities, about, start, link, measured
+    del velocities
     b_all -= drift
     a_all -= drift
     speed2 = np.einsum("ij,ij->i", b_all, b_all)

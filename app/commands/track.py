@@ -242,11 +242,11 @@ def run(args: argparse.Namespace) -> int:
     output_format(args.out)
     points = read_points(args.points)
     tracks = track_points(points, args)
-    rows = track_rows(points, tracks)
-    write_rows(args.out, rows)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
-    print(
-        f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "
-        f"{counted(tracks.n_tracks, 'track')}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}"
-    )
+    counts = f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, {counted(tracks.n_tracks, 'track')}"
+    rows = track_rows(points, tracks)
+    # Only the rows are written: the points and tracks freed do not add to the writer's peak.
+    del points, tracks
+    write_rows(args.out, rows)
+    print(f"{counts}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}")
     return 0
