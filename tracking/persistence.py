@@ -168,6 +168,9 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
         if variance is None:
             variance = np.full(squared.shape, max(float(np.median(squared)) / np.log(2.0), _MIN_NOISE**2))
         else:
+            # The last round's variances are replaced below; freed first, they are not held
+            # through the least-squares fit (the fit's peak).
+            del variance
             noise2, relative2 = _non_negative_fit(speed2[keep], squared[keep])
             noise2, relative2 = noise2 / _KEPT_MEAN, relative2 / _KEPT_MEAN
             variance = np.maximum(noise2 + relative2 * speed2, _MIN_NOISE**2)
