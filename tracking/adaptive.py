@@ -76,6 +76,8 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     statistics = fit_statistics(first)
     if statistics is None:
         return first, first_fit
+    # The first pass's tracks are not needed any more: freed, they do not add to the final pass's peak.
+    del first
     fitted = measured_config(config, statistics)
     drift = statistics.drift
     limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if config.d_max is not None else " (measured)")

@@ -213,7 +213,9 @@ def drop_short(tracks: Tracks, min_length: int) -> Tracks:
         Frames; 0 or 1 keeps every track that has a position.
     """
     first, last = tracks.spans()
-    return tracks.select((last >= first) & (last - first + 1 >= min_length))
+    keep = (last >= first) & (last - first + 1 >= min_length)
+    # Keeping them all, a copy of every point would only add to the peak memory.
+    return tracks if keep.all() else tracks.select(keep)
 
 
 __all__ = ["LifecycleConfig", "OpenTracks", "EndTracks", "goa_updown_open", "drop_short"]

@@ -107,54 +107,76 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
     >>> round(stats.persistence, 2), abs(round(stats.turn, 2))
     (1.0, 0.0)
     """
-    measured = tracks.present & (tracks.measurement != NO_MEASUREMENT)
-    step = np.diff(tracks.xy, axis=1)
-    linked = measured[:, 1:] & measured[:, :-1]
-    before, after = step[:, :-1][linked[:, :-1] & linked[:, 1:]], step[:, 1:][linked[:, :-1] & linked[:, 1:]]
-    if before.shape[0] < _MIN_TRIPLETS:
+    # From the point arrays, not the dense (tracks x frames) views, which would outlive the call
+    # in the tracks' cache: a link joins a measured point to the track's measured point in the
+    # next frame; in track-then-frame order, as the points are.
+    measured = tracks.point_measurement != NO_MEASUREMENT
+    link = (tracks.point_track[1:] == tracks.point_track[:-1]) & (tracks.point_column[1:] == tracks.point_column[:-1] + 1)
+    link &= measured[1:] & measured[:-1]
+    start = np.flatnonzero(link)
+    velocities = tracks.point_xy[start + 1] - tracks.point_xy[start]
+    # Two links in a row: the second starts where the first ends.
+    chained = np.zeros(start.size, bool)
+    inside = start + 1 < link.size
+    chained[inside] = link[start[inside] + 1]
+    triplets = int(np.count_nonzero(chained))
+    if triplets < _MIN_TRIPLETS:
         return None
-    velocities = step[linked]
     drift = np.median(velocities, axis=0)
-    b_all, a_all = before - drift, after - drift
+    # Robust to a first pass's absurd links: the median squared speed about the drift, per axis
+    # (an exponential variable's median is ln 2 of its mean for Gaussian velocities).
+    about = velocities - drift
+    spread = float(np.sqrt(np.median(np.einsum("ij,ij->i", about, about)) / (2.0 * np.log(2.0))))
+    # Chains in place, so that a million of them hold no more copies than the fit needs.
+    del about, start, link, measured
+    b_all, a_all = velocities[chained], velocities[np.flatnonzero(chained) + 1]
+    del velocities
+    b_all -= drift
+    a_all -= drift
     speed2 = np.einsum("ij,ij->i", b_all, b_all)
     # First round: links whose change is within the cut of the median change (as if the noise
     # did not depend on the speed), so a first pass's wrong links cannot steer the start.
-    keep = np.ones(before.shape[0], bool)
+    keep = np.ones(triplets, bool)
     variance = None
     for round_ in range(_ROUNDS):
         # Persistence and turning about the drift (the similarity transform that best maps each
         # velocity to the next: a rigid turn, as of a dish, is kept), then the variance model by
         # least squares on the squared change.
-        b, a = b_all[keep], a_all[keep]
         if variance is None:
             # At the start, the median over chains of each one's own transform: where a first
             # pass links wrongly as often as rightly, a least-squares start would be the wrong
             # links' (a dish 15% missed: persistence 0.8 and noise 0.4 x speed against 1.0 and 0.01).
+            # Every chain is kept in this round.
             moving = speed2 > 0
-            along = float(np.median(np.einsum("ij,ij->i", b[moving], a[moving]) / speed2[moving])) if moving.any() else 0.0
-            across = float(np.median((b[moving, 0] * a[moving, 1] - b[moving, 1] * a[moving, 0]) / speed2[moving])) if moving.any() else 0.0
+            b, a = b_all[moving], a_all[moving]
+            along = float(np.median(np.einsum("ij,ij->i", b, a) / speed2[moving])) if moving.any() else 0.0
+            across = float(np.median((b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0]) / speed2[moving])) if moving.any() else 0.0
         else:
+            b, a = b_all[keep], a_all[keep]
             norm = max(float(np.einsum("ij,ij->", b, b)), 1e-12)
             along = float(np.einsum("ij,ij->", b, a)) / norm
             across = float(np.sum(b[:, 0] * a[:, 1] - b[:, 1] * a[:, 0])) / norm
         persistence, turn = min(float(np.hypot(along, across)), 1.0), float(np.arctan2(across, along))
         if along <= 0:
             persistence, turn = 0.0, 0.0
-        change = a_all - persistence * _turned(b_all, turn)
+        del b, a
+        change = _turned(b_all, turn)
+        change *= persistence
+        np.subtract(a_all, change, out=change)
         squared = np.einsum("ij,ij->i", change, change) / 2.0
+        del change
         if variance is None:
             variance = np.full(squared.shape, max(float(np.median(squared)) / np.log(2.0), _MIN_NOISE**2))
         else:
+            # The last round's variances are replaced below; freed first, they are not held
+            # through the least-squares fit (the fit's peak).
+            del variance
             noise2, relative2 = _non_negative_fit(speed2[keep], squared[keep])
             noise2, relative2 = noise2 / _KEPT_MEAN, relative2 / _KEPT_MEAN
             variance = np.maximum(noise2 + relative2 * speed2, _MIN_NOISE**2)
         keep = squared / variance <= _CUT
         if keep.sum() < _MIN_TRIPLETS:
             keep = squared <= np.quantile(squared, 0.5)
-    # Robust to a first pass's absurd links: the median squared speed about the drift, per axis
-    # (an exponential variable's median is ln 2 of its mean for Gaussian velocities).
-    about = np.einsum("ij,ij->i", velocities - drift, velocities - drift)
-    spread = float(np.sqrt(np.median(about) / (2.0 * np.log(2.0))))
     fastest = float(np.quantile(np.sqrt(speed2[keep]), _FASTEST)) if keep.any() else 0.0
     return MotionStatistics(
         persistence,
@@ -162,7 +184,7 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
         float(np.sqrt(relative2)),
         (float(drift[0]), float(drift[1])),
         max(spread, _MIN_NOISE),
-        int(before.shape[0]),
+        triplets,
         turn,
         fastest,
     )
@@ -171,7 +193,13 @@ def fit_statistics(tracks: Tracks) -> MotionStatistics | None:
 def _turned(v: np.ndarray, angle: float) -> np.ndarray:
     """Vectors (N, 2) turned by ``angle`` radians (x right, y down: clockwise on screen)."""
     c, s = np.cos(angle), np.sin(angle)
-    return np.column_stack((c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]))
+    turned = np.empty_like(v, dtype=float)
+    # Column by column in place: on a million chains the temporaries would be the fit's peak.
+    np.multiply(v[:, 0], c, out=turned[:, 0])
+    turned[:, 0] -= s * v[:, 1]
+    np.multiply(v[:, 0], s, out=turned[:, 1])
+    turned[:, 1] += c * v[:, 1]
+    return turned
 
 
 def _non_negative_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:

@@ -17,7 +17,8 @@ from ..parallel import default_workers
 from ..progress import progress_bar
 from ..wording import counted
 from .detect import add_detection_options, detection_settings
-from .run import add_tracker_options, tracking_settings, workers_count
+from .run import workers_count
+from .tracker_options import add_tracker_options, tracking_settings
 
 
 # How long to keep trying to reach a scheduler named by --scheduler.

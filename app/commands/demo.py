@@ -13,7 +13,7 @@ from seedtrack.tracking.evaluation import evaluate_tracks
 
 from ..errors import UsageError, in_option_names
 from ..pipeline import DetectionSettings, run_pipeline
-from .run import add_tracker_options, tracking_settings
+from .tracker_options import add_tracker_options, tracking_settings
 
 
 def add_parser(subparsers) -> None:

@@ -20,9 +20,9 @@ from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
-from ..pipeline import POINT_COLUMNS, Points, group_points, point_rows, track_frames
+from ..points import POINT_COLUMNS, Points, group_points, point_rows, track_frames
 from ..wording import counted
-from .run import add_tracker_options, check_limits, lifecycle_config, tracking_settings
+from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
 
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
 FIRST_LINKS = {
@@ -242,11 +242,11 @@ def run(args: argparse.Namespace) -> int:
     output_format(args.out)
     points = read_points(args.points)
     tracks = track_points(points, args)
-    rows = track_rows(points, tracks)
-    write_rows(args.out, rows)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
-    print(
-        f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, "
-        f"{counted(tracks.n_tracks, 'track')}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}"
-    )
+    counts = f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, {counted(tracks.n_tracks, 'track')}"
+    rows = track_rows(points, tracks)
+    # Only the rows are written: the points and tracks freed do not add to the writer's peak.
+    del points, tracks
+    write_rows(args.out, rows)
+    print(f"{counts}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}")
     return 0

@@ -1,0 +1,201 @@
+"""Points grouped by frame and tracked, as ``seedtrack track`` and ``run`` both track them.
+
+Apart from :mod:`seedtrack.pipeline` so that tracking a points file loads no video or detection
+code (:mod:`seedtrack.pipeline` re-exports these names).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from seedtrack.data.csvio import TRACK_COLUMNS
+from seedtrack.data.errors import DataError
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short
+from seedtrack.tracking.linking import GOA_FAMILY, link_goa, pass_steps
+from seedtrack.tracking.trackers import run_tracker
+from seedtrack.tracking.tracks import Tracks
+
+from .progress import progress_bar
+
+__all__ = ["POINT_COLUMNS", "Points", "TrackingSettings", "group_points", "point_rows", "track_frames"]
+
+POINT_COLUMNS = ("frame", "x", "y")
+
+
+@dataclass(frozen=True)
+class Points:
+    """Measured points grouped by frame.
+
+    Attributes
+    ----------
+    frames : list of ndarray, each (M_k, 2)
+        Positions (x, y), pixels, of frame ``first_frame + k * frame_step``, sorted by x then y.
+    first_frame : int
+        0-based frame index of ``frames[0]``.
+    frame_step : int
+        Spacing of the frame numbers: 1, or N when every frame number present is a multiple
+        of N apart (every Nth frame measured, as ``run --step N`` writes them).
+    order : ndarray of int
+        0-based row of the input table of each point, frame after frame.
+    offset : ndarray of int
+        Position in ``order`` of each frame's first point.
+    kept : dict of str to ndarray
+        The input's other columns (as text when read from a file), one entry per row.
+    """
+
+    frames: list[np.ndarray]
+    first_frame: int
+    frame_step: int
+    order: np.ndarray
+    offset: np.ndarray
+    kept: dict[str, np.ndarray]
+
+
+def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | None = None) -> Points:
+    """Group the points of a table (columns frame, x, y, any others) by frame, sorted by
+    position within each, as ``seedtrack track`` and ``run`` both track them.
+
+    Parameters
+    ----------
+    table : dict of str to ndarray
+        ``frame`` (int), ``x``, ``y`` (finite floats), other columns kept as they are.
+    source
+        What the table was read from, to name in errors.
+    processed : ndarray of int, optional
+        The 0-based frames measured, evenly spaced, when known (a clip detected frame by frame,
+        some frames perhaps empty); by default the frame numbers present.
+
+    Raises
+    ------
+    DataError
+        Without ``processed``: if a frame is negative, or fewer than two frames hold points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([2, 0, 0, 4]), "x": np.array([5.0, 9.0, 1.0, 3.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> points.first_frame, points.frame_step, [f[:, 0].tolist() for f in points.frames]
+    (0, 2, [[1.0, 9.0], [5.0], [3.0]])
+    >>> points.order.tolist()
+    [2, 1, 0, 3]
+    """
+    frame, x, y = (table[name] for name in POINT_COLUMNS)
+    if processed is None:
+        if frame.size == 0:
+            raise DataError(source, "no points (only a header); tracking needs points in at least two frames")
+        if frame.min() < 0:
+            bad = int(np.argmax(frame < 0))
+            raise DataError(source, f"line {bad + 2}: frame {frame[bad]} is negative (frames are 0-based)")
+        processed = np.unique(frame)
+        if processed.size < 2:
+            raise DataError(source, f"all points are in frame {frame[0]}; tracking needs points in at least two frames")
+    # Frames numbered 0, 2, 4, ... are consecutive measurements, not measurements with every
+    # other frame missed (which no track would survive).
+    step = int(np.gcd.reduce(np.diff(processed))) if processed.size > 1 else 1
+    # Sorting by position makes the result independent of the order of the rows.
+    order = np.lexsort((y, x, frame))
+    first = int(processed[0])
+    columns = (int(processed[-1]) - first) // step + 1
+    offset = np.concatenate(([0], np.cumsum(np.bincount((frame - first) // step, minlength=columns))))
+    xy = np.column_stack((x, y))[order]
+    frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
+    kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
+    return Points(frames, first, step, order, offset[:-1], kept)
+
+
+def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The track columns of tracks.csv, in the input's frame numbers, and for each row the 0-based
+    row of the input table it measures (-1 where interpolated), so that nothing is joined on floats.
+
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> table = {"frame": np.array([1, 0, 1, 0]), "x": np.array([11.0, 0.0, 1.0, 10.0]), "y": np.zeros(4)}
+    >>> points = group_points(table, "points")
+    >>> rows, source = point_rows(points, track_frames(points.frames, TrackingSettings(algorithm="nn"), say=None))
+    >>> rows["track_id"].tolist(), source.tolist()
+    ([0, 0, 1, 1], [1, 2, 3, 0])
+    """
+    rows = tracks.to_rows()
+    measurement = tracks.point_measurement  # same row order as to_rows
+    column = rows["frame"] - tracks.first_frame
+    rows["frame"] = tracks.first_frame + column * points.frame_step
+    measured = measurement >= 0
+    source = np.full(measurement.size, -1, dtype=np.int64)
+    source[measured] = points.order[points.offset[column[measured]] + measurement[measured]]
+    return rows, source
+
+
+@dataclass(frozen=True)
+class TrackingSettings:
+    """What the tracker is asked to do: the options of ``seedtrack track`` (and of ``run``).
+
+    Attributes
+    ----------
+    algorithm : str
+        A GOA tracker (:data:`seedtrack.tracking.linking.GOA_FAMILY`), fitted to the motion, or
+        a comparison tracker of :data:`seedtrack.tracking.trackers.TRACKERS`, which takes only
+        ``config.d_max``.
+    config : GOAConfig
+        Before fitting to the motion.
+    lifecycle : LifecycleConfig or None
+        When tracks open and end; None for the paper's fixed count of tracks.
+    motion : {"auto", "smooth", "random"}
+    keep_model : bool
+        Keep ``config``'s individual model whatever the motion (the user chose it).
+    min_length : int
+        Tracks spanning fewer frames, gaps included, are dropped.
+    first_links : ndarray of int, shape (n, 2), optional
+        For "goa": the first two frames' correspondences given (the paper's protocol).
+    """
+
+    algorithm: str = "goa-updown"
+    config: GOAConfig = GOAConfig()
+    lifecycle: LifecycleConfig | None = LifecycleConfig()
+    motion: str = "auto"
+    keep_model: bool = False
+    min_length: int = 0
+    first_links: np.ndarray | None = None
+
+
+def track_frames(
+    frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] | None = print
+) -> Tracks:
+    """Track points as ``settings`` say, with a progress bar, and drop the short tracks.
+
+    The GOA family says on one ``motion: ...`` line how the points move
+    (:attr:`seedtrack.tracking.linking.MotionFit.summary`) to ``say`` (None: to nobody).
+    ``first_frame`` is the 0-based index of ``frames[0]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> frames = [np.array([[10.0 + 2 * k, 10.0], [40.0 - 2 * k, 30.0]]) for k in range(6)]
+    >>> track_frames(frames, TrackingSettings(min_length=3)).n_tracks  # doctest: +ELLIPSIS
+    motion: smooth-motion default: only 8 unambiguous 3-frame chains (need 30) ...
+    2
+    """
+    if settings.algorithm not in GOA_FAMILY:
+        return drop_short(run_tracker(settings.algorithm, frames, settings.config.d_max, first_frame), settings.min_length)
+    steps = pass_steps(settings.algorithm, len(frames), settings.motion, settings.keep_model)
+    with progress_bar(steps, "tracking", unit="step") as bar:
+        tracks, fit = link_goa(
+            frames,
+            settings.algorithm,
+            settings.config,
+            settings.lifecycle,
+            settings.motion,
+            settings.keep_model,
+            first_frame,
+            progress=bar.update,
+            first_links=settings.first_links,
+        )
+    if say is not None:
+        say(fit.summary)
+    return drop_short(tracks, settings.min_length)
