@@ -40,7 +40,8 @@ from .commands import evaluate as evaluate_command
 from .commands import render as render_command
 from .commands import track as track_command
 from .errors import UsageError
-from .pipeline import POINT_COLUMNS, DetectionSettings, detect_clip, group_points, point_rows
+from .pipeline import DetectionSettings, detect_clip
+from .points import POINT_COLUMNS, group_points, point_rows
 
 __all__ = ["detect", "link", "evaluate", "render", "Scores"]
 

@@ -31,7 +31,7 @@ from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
-from .points import POINT_COLUMNS, Points, TrackingSettings, group_points, point_rows, track_frames
+from .points import Points, TrackingSettings, group_points, point_rows, track_frames
 from .parallel import encode_video, ordered_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar

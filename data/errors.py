@@ -1,5 +1,7 @@
 """The one exception type for input a user gave us that we cannot use."""
 
+from pathlib import Path
+
 
 class DataError(Exception):
     """Bad input or output file: the message names the file and the problem in one line."""
@@ -30,7 +32,7 @@ def warn(path, problem: str) -> None:
     warnings.warn(DataWarning(f"{path}: {problem}"), stacklevel=2)
 
 
-def check_file(path) -> "Path":
+def check_file(path) -> Path:
     """``path`` as a Path, if it names an existing file.
 
     Raises
@@ -38,7 +40,6 @@ def check_file(path) -> "Path":
     DataError
         "no such file", or "is a folder" when it names one (a folder given where a file belongs).
     """
-    from pathlib import Path
 
     path = Path(path)
     if path.is_dir():

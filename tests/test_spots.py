@@ -1,6 +1,5 @@
 """The spot detector (Crocker and Grier) and the detector choice, on small exact scenes."""
 
-import cv2
 import numpy as np
 import pytest
 

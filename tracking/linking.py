@@ -10,7 +10,7 @@ IM2 follows chance alignments from one neighbour to the next.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Sequence
 
 import numpy as np

@@ -20,7 +20,7 @@ from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError, option_name, output_file
-from ..points import POINT_COLUMNS, Points, group_points, point_rows, track_frames
+from ..points import Points, group_points, point_rows, track_frames
 from ..wording import counted
 from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
 

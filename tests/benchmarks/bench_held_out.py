@@ -36,11 +36,11 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
-from seedtrack.pipeline import track_with_motion
 from seedtrack.tracking.adaptive import first_pass
 from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.goa import GOAConfig, goa_updown
 from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
+from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import NO_MEASUREMENT
@@ -105,9 +105,7 @@ SCENES = (
 
 def _seedtrack(max_speed: float | None):
     def run(frames, limit, missed):
-        return track_with_motion(
-            frames, GOAConfig(d_max=max_speed), "auto", lambda moved, fitted: goa_updown_open(moved, fitted, LifecycleConfig()), say=lambda _: None
-        )
+        return link_goa(frames, "goa-updown", GOAConfig(d_max=max_speed))[0]
 
     return run
 
