@@ -28,7 +28,8 @@ from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 
 from .errors import UsageError
-from .pipeline import DetectionSettings, TrackingSettings, run_pipeline
+from .pipeline import DetectionSettings, run_pipeline
+from .points import TrackingSettings
 
 STATUSES = ("done", "failed", "skipped")
 BATCH_COLUMNS = ("input", "status", "frames", "tracks", "seconds", "error")

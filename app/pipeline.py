@@ -31,15 +31,15 @@ from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
-from .points import Points, TrackingSettings, group_points, point_rows, track_frames
+from .points import TrackingSettings, group_points, track_frames
 from .parallel import encode_video, ordered_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
 
 __all__ = [
-    "DETECTORS", "Detections", "DetectionSettings", "ClipDetections", "Points", "TrackingSettings",
-    "detect_clip", "group_points", "point_rows", "track_frames", "render_overlay", "run_pipeline",
+    "DETECTORS", "Detections", "DetectionSettings", "ClipDetections",
+    "detect_clip", "render_overlay", "run_pipeline",
 ]
 
 

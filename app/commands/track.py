@@ -217,7 +217,7 @@ def check_options(args: argparse.Namespace) -> None:
 
 
 def track_points(points: Points, args: argparse.Namespace, say=print) -> Tracks:
-    """Run the tracker the options name on the points (see :func:`seedtrack.pipeline.track_frames`)."""
+    """Run the tracker the options name on the points (see :func:`seedtrack.points.track_frames`)."""
     settings = tracking_settings(args, goa_config(args))
     if _first_links_file(args):
         settings = replace(settings, first_links=given_first_links(Path(args.first_links), points))
