@@ -287,7 +287,8 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
         return SpotShape(float(_SIZE_SIGMAS[0]), 1.0, 3)
     response = best[rows, columns]
     order = np.argsort(response)[::-1]
-    # The objects vote, not the noise: maxima at least half as strong as the strongest.
+    # The objects vote, not the noise: maxima at least half as strong as the strongest, each by
+    # its strength, so that a small static mark beside one bright spot does not outvote it.
     bar = 0.5 * float(response[order[0]])
     strongest = order[: min(_SIZE_VOTERS, int(np.sum(response >= bar)))]
     rows, columns = rows[strongest], columns[strongest]
@@ -304,7 +305,14 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
         across, along = -((hxx + hyy) / 2 - half_gap), -((hxx + hyy) / 2 + half_gap)
         ratios[here] = np.where(along > 0, across / np.maximum(along, 1e-12), np.inf)
     sigma = float(np.median(_SIZE_SIGMAS[level]))
-    return SpotShape(sigma, float(np.median(ratios)), max(3, 2 * int(round(3 * sigma)) + 1))
+    return SpotShape(sigma, _weighted_median(ratios, response[strongest]), max(3, 2 * int(round(3 * sigma)) + 1))
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    """The value below which half the weight lies (the lower of two when it falls between)."""
+    order = np.argsort(values, kind="stable")
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
 def fit_spot_settings(

@@ -95,6 +95,15 @@ def test_the_choice_takes_spots_for_round_beads_and_blobs_for_seeds():
     assert choose_detector(gray, "dark", detector="spot", roi=roi).name == "spot"
 
 
+def test_bright_round_spots_outvote_weaker_elongated_marks():
+    # Two round spots and a static elongated mark with two maxima, as in TrackMate's FakeTracks:
+    # counted one each, the four are half elongated and the median between them says seeds.
+    image = gaussians([(30.0, 40.0)], sigma=1.25, amplitude=200) + gaussians([(60.0, 60.0)], sigma=1.25, amplitude=110, background=0)
+    for y in (20.0, 28.0):
+        image += 130 * np.exp(-((COLUMNS - 75) ** 2 / (2 * 1.0**2) + (ROWS - y) ** 2 / (2 * 2.0**2)))
+    assert spot_shape(image).elongation < 1.4 and choose_detector(image, "light").name == "spot"
+
+
 def test_the_api_finds_spots_in_16_bit_and_float_frames_on_their_own_values():
     import seedtrack
 
