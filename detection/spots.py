@@ -19,7 +19,7 @@ so :func:`detect_spots` is a function of one frame and those settings alone.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -44,12 +44,23 @@ _HALO_RATIO = 3.0
 _MAX_ITERATIONS = 10
 _WINDOW_ITERATIONS = 4
 # The least mass is set so that white noise of the measured level gives this many false spots
-# per pixel, measured on a generated frame of noise of this side with this seed.
+# per pixel, measured on a generated frame of noise of this side with this seed; fewer where the
+# frame holds so few spots that this many false ones would be more than this share of them.
 _FALSE_SPOTS_PER_PIXEL = 1e-5
+_FALSE_SHARE = 0.01
 _CALIBRATION_SIZE = 1024
 _CALIBRATION_SEED = 16
 # Immerkaer's noise filter: the difference of two discrete Laplacians.
 _IMMERKAER = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+# A pixel less the mean of its 8 neighbours: takes off smooth light like Immerkaer's filter but
+# keeps 0.83 of the noise's skewness (the Laplacians' difference keeps a sixth).
+_CENTRE_LESS_RING = np.full((3, 3), -1 / 8, np.float32)
+_CENTRE_LESS_RING[1, 1] = 1
+# The skewness is measured on residuals within this many of their standard deviations of their
+# median (so that spots, whose residuals lie far out, hardly count); the skewnesses of the table
+# that turns that into the noise's skewness.
+_SKEW_WINDOW = 3.0
+_SKEW_GRID = np.round(np.arange(0, 2.05, 0.1), 1)
 # Candidates whose mass at the first disc is below this fraction of the least mass are dropped
 # before refinement (speed only: a disc moved onto its spot gains far less than this).
 _PREFILTER = 0.5
@@ -214,19 +225,89 @@ def pixel_noise(gray: np.ndarray, roi: np.ndarray | None = None) -> float:
     return sigma
 
 
+def noise_skewness(gray: np.ndarray, roi: np.ndarray | None = None) -> float:
+    """Skewness of the pixel noise of a frame, towards the light (0 for Gaussian noise).
+
+    A camera on a dark scene counts a few photons a pixel: its noise is skewed towards bright
+    (Poisson noise of mean m has skewness 1 / sqrt(m)), and its bright excursions make false
+    spots far more often than Gaussian noise of the same standard deviation. The skewness is
+    read off the residuals of each pixel less the mean of its neighbours, those within 3 of
+    their standard deviations of their median only (a spot's residuals lie further out), by
+    matching that trimmed skewness to the one gamma-distributed noise gives (a table made once
+    on generated noise). Rounded to 0.1, between 0 (never taken for lighter-tailed than
+    Gaussian) and 2 (exponential noise).
+
+    Parameters
+    ----------
+    gray : ndarray, shape (H, W)
+        Grey frame, any depth, spots positive.
+    roi : ndarray of uint8, shape (H, W), optional
+        Nonzero where to measure.
+
+    Returns
+    -------
+    float
+
+    Example
+    -------
+    >>> rng = np.random.default_rng(0)
+    >>> noise_skewness(rng.normal(100, 5, (256, 256))), noise_skewness(rng.poisson(2.0, (256, 256)) * 7.0)
+    (0.0, 0.8)
+    """
+    statistic = _trimmed_skewness(np.asarray(gray, np.float32), roi)
+    table = _trimmed_skewness_table()
+    return round(float(np.interp(statistic, table, _SKEW_GRID)), 1)
+
+
+def _trimmed_skewness(gray: np.ndarray, roi: np.ndarray | None) -> float:
+    residual = cv2.filter2D(gray, -1, _CENTRE_LESS_RING)[1:-1, 1:-1]
+    if roi is not None:
+        residual = residual[roi[1:-1, 1:-1] > 0]
+    residual = residual.ravel()
+    if residual.size < 16:
+        return 0.0
+    centre = float(np.median(residual))
+    spread = _MAD_TO_SIGMA * float(np.median(np.abs(residual - centre)))
+    kept = residual[np.abs(residual - centre) < _SKEW_WINDOW * spread]
+    deviation = float(np.std(kept)) if kept.size >= 16 else 0.0
+    if deviation == 0:
+        # No noise to speak of (a drawn frame): nothing to skew the least mass.
+        return 0.0
+    return float(np.mean(((kept - kept.mean()) / deviation) ** 3))
+
+
 @functools.lru_cache(maxsize=None)
-def _unit_noise_levels(diameter: int) -> tuple[float, float]:
-    """(floor, least mass) for white noise of unit standard deviation at this diameter.
+def _trimmed_skewness_table() -> np.ndarray:
+    """The trimmed skewness of gamma noise of each skewness of the grid (fixed seed)."""
+    return np.maximum.accumulate([_trimmed_skewness(_unit_noise((256, 256), skewness), None) for skewness in _SKEW_GRID])
+
+
+def _unit_noise(shape: tuple[int, int], skewness: float) -> np.ndarray:
+    """White noise of zero mean, unit standard deviation and this skewness: Gaussian at 0, else
+    gamma-distributed (shape 4 / skewness^2), as photon counts are."""
+    rng = np.random.default_rng(_CALIBRATION_SEED)
+    if skewness <= 0:
+        return rng.standard_normal(shape).astype(np.float32)
+    k = 4 / skewness**2
+    return ((rng.standard_gamma(k, shape) - k) / np.sqrt(k)).astype(np.float32)
+
+
+@functools.lru_cache(maxsize=None)
+def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, float, float]:
+    """(floor, least mass, tail) for white noise of unit standard deviation and this skewness at
+    this diameter.
 
     The floor is the band-passed noise's standard deviation; the least mass is the mass that
     the noise's own local maxima exceed once per 10^5 pixels, found on a frame of generated
-    noise (fixed seed, so always the same).
+    noise (fixed seed, so always the same); the tail is how much more mass they exceed ten
+    times more rarely (measured between once per 10^4 and once per 10^5 pixels).
     """
-    noise = np.random.default_rng(_CALIBRATION_SEED).standard_normal((_CALIBRATION_SIZE, _CALIBRATION_SIZE)).astype(np.float32)
+    noise = _unit_noise((_CALIBRATION_SIZE, _CALIBRATION_SIZE), skewness)
     band = band_pass(noise, diameter)
     floor = float(np.std(band[diameter:-diameter, diameter:-diameter]))
     masses = np.sort(detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor))["mass"])[::-1]
-    return floor, float(masses[int(_FALSE_SPOTS_PER_PIXEL * noise.size)])
+    least = float(masses[int(_FALSE_SPOTS_PER_PIXEL * noise.size)])
+    return floor, least, least - float(masses[int(10 * _FALSE_SPOTS_PER_PIXEL * noise.size)])
 
 
 @dataclass(frozen=True)
@@ -320,9 +401,14 @@ def fit_spot_settings(
 ) -> SpotSettings:
     """The clip's spot settings from one frame.
 
-    The diameter is estimated (:func:`spot_shape`) unless given. The noise is measured
-    (:func:`pixel_noise`), and floor and least mass are those at which white noise of that level
-    would make one false spot per 10^5 pixels (about 3 in a 640 x 512 frame).
+    The diameter is estimated (:func:`spot_shape`) unless given. The noise's level and skewness
+    are measured (:func:`pixel_noise`, :func:`noise_skewness`), and floor and least mass are
+    those at which white noise of that level and skewness would make one false spot per 10^5
+    pixels (about 3 in a 640 x 512 frame), or fewer when the frame holds so few spots that
+    this would be more than one false spot in a hundred: a few spots in a small frame, as in
+    TrackMate's FakeTracks, are held to a least mass that the noise reaches once in a hundred
+    frames' spots (the noise's mass tail continued at the slope it has between once per 10^4
+    and once per 10^5 pixels, which for Gaussian-like tails errs high).
 
     Example
     -------
@@ -333,8 +419,15 @@ def fit_spot_settings(
     if diameter is None:
         diameter = spot_shape(gray, polarity, roi).diameter
     sigma = pixel_noise(gray, roi)
-    floor, mass = _unit_noise_levels(int(diameter))
-    return SpotSettings(diameter=int(diameter), min_mass=mass * sigma, polarity=polarity, floor=floor * sigma)
+    signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
+    floor, mass, tail = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
+    settings = SpotSettings(diameter=int(diameter), min_mass=mass * sigma, polarity=polarity, floor=floor * sigma)
+    pixels = int(np.count_nonzero(roi)) if roi is not None else np.asarray(gray).shape[0] * np.asarray(gray).shape[1]
+    spots = len(detect_spots(gray, settings, roi=roi)["x"])
+    allowed = _FALSE_SHARE * spots / max(pixels, 1)
+    if 0 < allowed < _FALSE_SPOTS_PER_PIXEL:
+        settings = replace(settings, min_mass=(mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * sigma)
+    return settings
 
 
 def detect_spots(
