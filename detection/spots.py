@@ -60,6 +60,10 @@ _CENTRE_LESS_RING[1, 1] = 1
 # median (so that spots, whose residuals lie far out, hardly count); the skewnesses of the table
 # that turns that into the noise's skewness.
 _SKEW_WINDOW = 3.0
+# False spots come from where the noise is strongest (Poisson noise grows with the light): the
+# least mass is set for the noise of the noisiest tenth of squares of this side, pixels.
+_NOISE_TILE = 32
+_NOISIEST_PERCENT = 90
 _SKEW_GRID = np.round(np.arange(0, 2.05, 0.1), 1)
 # Candidates whose mass at the first disc is below this fraction of the least mass are dropped
 # before refinement (speed only: a disc moved onto its spot gains far less than this).
@@ -223,6 +227,16 @@ def pixel_noise(gray: np.ndarray, roi: np.ndarray | None = None) -> float:
         step = float(np.min(np.diff(sample))) if sample.size > 1 else 1.0
         sigma = max(sigma, step / np.sqrt(12))
     return sigma
+
+
+def _noisiest_level(gray: np.ndarray, roi: np.ndarray | None) -> float:
+    """Immerkaer's noise level over squares of :data:`_NOISE_TILE` pixels, the 90th percentile."""
+    residual = np.abs(cv2.filter2D(np.asarray(gray, np.float32), -1, _IMMERKAER)) * np.float32(np.sqrt(np.pi / 2) / 6)
+    centres = slice(_NOISE_TILE // 2, None, _NOISE_TILE)
+    local = cv2.blur(residual, (_NOISE_TILE, _NOISE_TILE), borderType=cv2.BORDER_REFLECT)[centres, centres]
+    if roi is not None:
+        local = local[roi[centres, centres] > 0]
+    return float(np.percentile(local, _NOISIEST_PERCENT)) if local.size else 0.0
 
 
 def noise_skewness(gray: np.ndarray, roi: np.ndarray | None = None) -> float:
@@ -402,9 +416,10 @@ def fit_spot_settings(
     """The clip's spot settings from one frame.
 
     The diameter is estimated (:func:`spot_shape`) unless given. The noise's level and skewness
-    are measured (:func:`pixel_noise`, :func:`noise_skewness`), and floor and least mass are
-    those at which white noise of that level and skewness would make one false spot per 10^5
-    pixels (about 3 in a 640 x 512 frame), or fewer when the frame holds so few spots that
+    are measured (:func:`pixel_noise`, :func:`noise_skewness`); the floor is the band-passed
+    level of white noise of that level, and the least mass the mass at which white noise of
+    that skewness and of the level of the noisiest tenth of the frame (squares of 32 px) would
+    make one false spot per 10^5 pixels (about 3 in a 640 x 512 frame), or fewer when the frame holds so few spots that
     this would be more than one false spot in a hundred: a few spots in a small frame, as in
     TrackMate's FakeTracks, are held to a least mass that the noise reaches once in a hundred
     frames' spots (the noise's mass tail continued at the slope it has between once per 10^4
@@ -419,14 +434,15 @@ def fit_spot_settings(
     if diameter is None:
         diameter = spot_shape(gray, polarity, roi).diameter
     sigma = pixel_noise(gray, roi)
+    strongest = max(sigma, _noisiest_level(gray, roi))
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
     floor, mass, tail = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
-    settings = SpotSettings(diameter=int(diameter), min_mass=mass * sigma, polarity=polarity, floor=floor * sigma)
+    settings = SpotSettings(diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma)
     pixels = int(np.count_nonzero(roi)) if roi is not None else np.asarray(gray).shape[0] * np.asarray(gray).shape[1]
     spots = len(detect_spots(gray, settings, roi=roi)["x"])
     allowed = _FALSE_SHARE * spots / max(pixels, 1)
     if 0 < allowed < _FALSE_SPOTS_PER_PIXEL:
-        settings = replace(settings, min_mass=(mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * sigma)
+        settings = replace(settings, min_mass=(mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * strongest)
     return settings
 
 
