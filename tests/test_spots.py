@@ -97,14 +97,14 @@ def test_the_choice_takes_spots_for_round_beads_and_blobs_for_seeds():
 
 
 def test_few_spots_in_skewed_camera_noise_give_few_false_ones():
-    # A few photons a pixel: noise skewed towards bright, whose excursions Gaussian noise of the
-    # same level would make far more rarely (the least mass of Gaussian noise let 9 false spots
-    # through in these 12 frames of 4 spots).
+    # A few photons a pixel on a sloping background: noise skewed towards bright and strongest
+    # on the bright side, whose excursions Gaussian noise of the frame's mean level would make
+    # far more rarely (its least mass let 9 false spots through in these 12 frames of 4 spots).
     clip = make_sparse_spots(SparseSpotSpec(frames=12, random_seed=5))
     settings = fit_spot_settings(clip.frames[0], "light")
     found = [detect_spots(frame, settings) for frame in clip.frames]
     matched = sum(len(match_frame(np.column_stack((t["x"], t["y"])), xy, 2.0)[0]) for t, xy in zip(found, clip.xy))
-    assert matched == 48 and sum(len(t["x"]) for t in found) <= 52
+    assert matched == 48 and sum(len(t["x"]) for t in found) <= 49
 
 
 def test_bright_round_spots_outvote_weaker_elongated_marks():
