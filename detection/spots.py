@@ -416,14 +416,13 @@ def fit_spot_settings(
     """The clip's spot settings from one frame.
 
     The diameter is estimated (:func:`spot_shape`) unless given. The noise's level and skewness
-    are measured (:func:`pixel_noise`, :func:`noise_skewness`); the floor is the band-passed
-    level of white noise of that level, and the least mass the mass at which white noise of
-    that skewness and of the level of the noisiest tenth of the frame (squares of 32 px) would
-    make one false spot per 10^5 pixels (about 3 in a 640 x 512 frame), or fewer when the frame holds so few spots that
-    this would be more than one false spot in a hundred: a few spots in a small frame, as in
-    TrackMate's FakeTracks, are held to a least mass that the noise reaches once in a hundred
-    frames' spots (the noise's mass tail continued at the slope it has between once per 10^4
-    and once per 10^5 pixels, which for Gaussian-like tails errs high).
+    are measured (:func:`pixel_noise`, :func:`noise_skewness`). The floor is the band-passed
+    level of white noise of that level; the least mass is the mass at which white noise of that
+    skewness, at the level of the noisiest tenth of the frame (squares of 32 px), makes one false
+    spot per 10^5 pixels (about 3 in a 640 x 512 frame), or one per hundred of the spots this
+    frame holds when that is rarer (a few spots in a small frame, as in TrackMate's FakeTracks:
+    the noise's mass tail is continued at the slope it has between once per 10^4 and once per
+    10^5 pixels, which errs high for tails as light as or lighter than exponential).
 
     Example
     -------
@@ -442,7 +441,7 @@ def fit_spot_settings(
     spots = len(detect_spots(gray, settings, roi=roi)["x"])
     allowed = _FALSE_SHARE * spots / max(pixels, 1)
     if 0 < allowed < _FALSE_SPOTS_PER_PIXEL:
-        settings = replace(settings, min_mass=(mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * strongest)
+        settings = replace(settings, min_mass=float((mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * strongest))
     return settings
 
 
