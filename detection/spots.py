@@ -442,11 +442,13 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
     # One product gives each disc's light and its two first moments.
     moments = np.stack([np.ones_like(dx), dx, dy], axis=1).astype(np.float32)
     scale = np.float32(-1 / (2 * window**2))
+    windowed = np.empty_like(weights)
     for _ in range(_WINDOW_ITERATIONS):
         # The window is separable: one exponential per row and column offset of each disc.
         across = np.exp(scale * (span[None, :] - ox[:, None]) ** 2)
         down = np.exp(scale * (span[None, :] - oy[:, None]) ** 2)
-        total, sx, sy = ((weights * across[:, dx + radius] * down[:, dy + radius]) @ moments).T
+        np.multiply(weights, across[:, dx + radius], out=windowed)
+        total, sx, sy = (np.multiply(windowed, down[:, dy + radius], out=windowed) @ moments).T
         total = np.maximum(total, np.float32(1e-30))
         ox, oy = sx / total, sy / total
     return ox.astype(float), oy.astype(float)
@@ -466,7 +468,10 @@ def _refine(
     # any disc is gathered.
     summed = cv2.integral(padded, sdepth=cv2.CV_32F)
     side = 2 * radius + 1
-    square = summed[rows + side, columns + side] - summed[rows, columns + side] - summed[rows + side, columns] + summed[rows, columns]
+    stride = summed.shape[1]
+    corner = rows * stride + columns
+    summed = summed.ravel()
+    square = summed[corner + side * stride + side] - summed[corner + side] - summed[corner + side * stride] + summed[corner]
     hopeful = square > min_mass
     rows, columns = rows[hopeful], columns[hopeful]
     # Discs are gathered from the flat frame, one index per pixel: a quarter of the time of
