@@ -10,11 +10,14 @@ At most a few frames per worker are in flight, so memory does not grow with the 
 from __future__ import annotations
 
 import collections
+import contextlib
 import ctypes
 import ctypes.util
 import multiprocessing
 import os
+import queue
 import signal
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from typing import Callable, Iterable, Iterator, TypeVar
 
@@ -116,6 +119,62 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
         finally:
             for future in pending:
                 future.cancel()
+
+
+@contextlib.contextmanager
+def read_ahead(items: Iterable[Item], depth: int = 4) -> Iterator[Iterator[Item]]:
+    """The items, taken from ``items`` by a thread of their own up to ``depth`` ahead, in order.
+
+    For a frame source: the next frames decode (FFmpeg works without Python's lock for most of
+    it) while this thread detects in the last one. Leaving the block stops the thread and waits
+    for it, so the source may be closed right after; an exception raised while taking an item is
+    raised here, at that item.
+
+    Example
+    -------
+    >>> with read_ahead(range(3)) as numbers:
+    ...     list(numbers)
+    [0, 1, 2]
+    """
+    ready: queue.Queue = queue.Queue(depth)
+    stop = threading.Event()
+    done = object()
+
+    def hand(entry) -> bool:
+        while not stop.is_set():
+            try:
+                ready.put(entry, timeout=0.1)
+                return True
+            except queue.Full:
+                pass
+        return False
+
+    def take() -> None:
+        try:
+            for item in items:
+                if not hand((True, item)):
+                    return
+        except BaseException as error:  # handed over to be raised in the consumer's thread
+            hand((False, error))
+            return
+        hand((True, done))
+
+    def taken() -> Iterator[Item]:
+        while True:
+            ok, item = ready.get()
+            if not ok:
+                raise item
+            if item is done:
+                return
+            yield item
+
+    reader = threading.Thread(target=take, name="read-ahead", daemon=True)
+    reader.start()
+    try:
+        yield taken()
+    finally:
+        stop.set()
+        reader.join()
 
 
 def encode_video(path, frames: Iterable[np.ndarray], fps: float, workers: int, progress=None) -> int:
