@@ -125,8 +125,9 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
 def read_ahead(items: Iterable[Item], depth: int = 4) -> Iterator[Iterator[Item]]:
     """The items, taken from ``items`` by a thread of their own up to ``depth`` ahead, in order.
 
-    For a frame source: the next frames decode (FFmpeg works without Python's lock for most of
-    it) while this thread detects in the last one. Leaving the block stops the thread and waits
+    For a frame source: the next frames decode while this thread detects in the last one, as
+    far as decoder and detector let go of Python's lock (OpenCV's calls and numpy's operations on
+    whole frames do). Leaving the block stops the thread and waits
     for it, so the source may be closed right after; an exception raised while taking an item is
     raised here, at that item.
 

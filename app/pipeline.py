@@ -154,7 +154,7 @@ def detect_clip(
                     yield index, image
                     bar.update(1)
 
-            # Decoding the next frames goes on beside detection (on another core, if there is one).
+            # The next frames decode beside detection, on another core if there is one.
             with read_ahead(source) as read:
                 detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers))
         if not detections.columns:
