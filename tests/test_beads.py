@@ -1,8 +1,4 @@
-"""The README's figures on real footage: trackpy's bulk-water beads (BSD licence), found in
-shared/data beside the checkout (or beside the folder of worktrees), or where SEEDTRACK_BEADS says."""
-
-import os
-from pathlib import Path
+"""The README's figures on real footage: trackpy's bulk-water beads (see footage.py for where)."""
 
 import cv2
 import numpy as np
@@ -12,9 +8,8 @@ from seedtrack.data.frames import open_frames
 from seedtrack.detection.blobs import to_gray
 from seedtrack.pipeline import DetectionSettings, detect_clip
 
-_SHARED = next((folder / "shared" / "data" for folder in Path(__file__).resolve().parents if (folder / "shared" / "data").is_dir()), Path("."))
-BEADS = Path(os.environ.get("SEEDTRACK_BEADS", _SHARED / "bulk-water-240-479.mp4"))
-needs_beads = pytest.mark.skipif(not BEADS.exists(), reason=f"the real bead footage is not at {BEADS} (set SEEDTRACK_BEADS)")
+from footage import BEADS, needs_beads
+
 
 
 def quiet(line):

@@ -1,8 +1,6 @@
 """Open GOA-updown: tracks that start, end and come back, on exact scenes, generated clips and random points."""
 
-import os
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +20,8 @@ from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import Tracks
+
+from footage import BEADS, needs_beads
 
 T = np.arange(12.0)
 # Two points moving steadily in opposite directions, far apart.
@@ -194,11 +194,7 @@ def test_track_refuses_bad_lifecycle_options(tmp_path, capsys, options, message)
     assert not out.exists()
 
 
-# trackpy's bulk-water clip (BSD licence), beside the checkout or wherever SEEDTRACK_BEADS says.
-BEADS = Path(os.environ.get("SEEDTRACK_BEADS", Path(__file__).resolve().parents[2] / "shared" / "data" / "bulk-water-240-479.mp4"))
-
-
-@pytest.mark.skipif(not BEADS.exists(), reason=f"the real bead footage is not at {BEADS} (set SEEDTRACK_BEADS)")
+@needs_beads
 def test_invariants_hold_on_real_beads_with_default_options():
     with open_frames(BEADS, start=100, end=104) as source:
         frames = [np.column_stack((c["x"], c["y"])) for c in (detect_blobs(image, BlobOptions()) for _, image in source)]
