@@ -140,6 +140,18 @@ def test_same_options_give_the_same_files(tmp_path):
     assert outputs[0] == outputs[1]
 
 
+def test_values_run_a_subset_of_the_sweep_on_the_same_data(tmp_path, capsys):
+    for folder, values in (("all", []), ("one", ["--values", "8"])):
+        assert main(["experiment", "density", "--out", str(tmp_path / folder), "--runs", "1", "--tiny", *values]) == 0
+    every = read_table(tmp_path / "all" / "density-self.csv", required=("trajectories", "seed"))
+    chosen = read_table(tmp_path / "one" / "density-self.csv", required=("trajectories", "seed"))
+    assert set(chosen["trajectories"]) == {8}
+    np.testing.assert_array_equal(chosen["track_error"], every["track_error"][every["trajectories"] == 8])
+    assert main(["experiment", "density", "--out", str(tmp_path), "--runs", "1", "--tiny", "--values", "7"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--values 7 not swept" in error
+
+
 def test_bad_run_count_is_a_one_line_error(tmp_path, capsys):
     assert main(["experiment", "density", "--out", str(tmp_path), "--runs", "0"]) == 2
     error = capsys.readouterr().err

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -38,6 +39,13 @@ def add_parser(subparsers) -> None:
         help="self (default): every tracker initialises itself; given: every tracker is given the true links of "
         "frames 0 and 1, as in the paper's sweeps (its section 6)",
     )
+    parser.add_argument(
+        "--values",
+        type=_values,
+        default=None,
+        metavar="X,X,...",
+        help="run only these of the experiment's swept values (the same data as in the full sweep)",
+    )
     parser.add_argument("--tiny", action="store_true", help="a few points over a few frames: a check that runs in seconds")
     parser.set_defaults(run=run)
 
@@ -50,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
     experiment = EXPERIMENTS[args.name]
     trackers = trackers_of(experiment)
     cases = experiment.cases(args.tiny)
-    tasks = [Task(experiment.name, index, run, args.tiny, trackers, args.protocol) for run in range(args.runs) for index in range(len(cases))]
+    chosen = _chosen_cases(cases, args.values)
+    tasks = [Task(experiment.name, index, run, args.tiny, trackers, args.protocol) for run in range(args.runs) for index in chosen]
     stem = f"{experiment.name}-{args.protocol}"
     with output_folder(args.out):
         rows = _run_tasks(tasks, args.jobs, stem)
@@ -65,6 +74,24 @@ def run(args: argparse.Namespace) -> int:
             print(line)
     print(f"wrote {args.out / (stem + '.csv')}, {stem}-summary.csv and {stem}.png")
     return 0
+
+
+def _values(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(value) for value in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+
+
+def _chosen_cases(cases: list, values: tuple[float, ...] | None) -> list[int]:
+    """Indices of the cases whose swept value is among ``values`` (all without)."""
+    if values is None:
+        return list(range(len(cases)))
+    unknown = [v for v in values if not any(math.isclose(v, case.x) for case in cases)]
+    if unknown:
+        raise UsageError(f"--values {', '.join(f'{v:g}' for v in unknown)} not swept by this experiment "
+                         f"(it sweeps {', '.join(f'{case.x:g}' for case in cases)})")
+    return [index for index, case in enumerate(cases) if any(math.isclose(v, case.x) for v in values)]
 
 
 def _run_tasks(tasks: list[Task], jobs: int, name: str) -> list[dict]:
