@@ -3,7 +3,9 @@
 An experiment is a list of cases (one per value of the swept parameter), each a PSMG spec and
 the speed limit handed to every tracker. A run draws one data set per case from a seed that
 depends only on the experiment, the case and the run number, tracks it with every tracker and
-scores the result against the truth; the same options therefore give the same files.
+scores the result against the truth; the same options therefore give the same files. Under the
+"given" protocol (the paper's) every tracker is handed the true links of frames 0 and 1; under
+"self" each initialises itself (:data:`PROTOCOLS`, :func:`run_task`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,6 @@ import numpy as np
 
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.motion import CombinedModel, IndividualModel
@@ -120,17 +121,12 @@ class Experiment:
     with_peers: bool = True
 
 
-def _goa(algorithm: str, config: GOAConfig, motion: str, lifecycle: LifecycleConfig | None = None) -> Runner:
-    """A GOA tracker; under the given protocol GOA's forward pass from the given first links (the
-    paper's GOA), else ``algorithm`` initialising itself."""
-
-    def run(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
-        limited = replace(config, d_max=speed_limit)
-        if given is not None:
-            return link_goa(frames, "goa", limited, motion=motion, first_links=given)[0]
-        return link_goa(frames, algorithm, limited, lifecycle, motion=motion)[0]
-
-    return run
+def _default(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+    """seedtrack with no options: ``seedtrack track`` (the open GOA-updown, the motion measured),
+    or given the first links ``seedtrack track --algorithm goa --first-links``."""
+    if given is None:
+        return TRACKERS["goa-updown"].run(frames, speed_limit, 0)
+    return link_goa(frames, "goa", GOAConfig(d_max=speed_limit), first_links=given)[0]
 
 
 # The published scheme (Veenman et al. 2001): IM2 + CM1, first links by nearest-neighbour
@@ -140,7 +136,16 @@ PUBLISHED = GOAConfig(initialisation="im1", restart_lost=False)
 
 
 def _published(config: GOAConfig = PUBLISHED) -> Runner:
-    return _goa("goa-updown-fixed", config, "smooth")
+    """The published scheme with ``config``'s models: GOA-updown as published, or under the given
+    protocol the paper's GOA forward pass from the given first links."""
+
+    def run(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+        limited = replace(config, d_max=speed_limit)
+        if given is not None:
+            return link_goa(frames, "goa", limited, motion="smooth", first_links=given)[0]
+        return link_goa(frames, "goa-updown-fixed", limited, None, motion="smooth")[0]
+
+    return run
 
 
 def _with_given_links(frames: list[np.ndarray], given: np.ndarray, tracks: Tracks) -> Tracks:
@@ -196,7 +201,7 @@ def _rs(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) 
 
 
 RUNNERS: dict[str, Runner] = {
-    "default": _goa("goa-updown", GOAConfig(), "auto", LifecycleConfig()),
+    "default": _default,
     "published": _published(),
     **{name: _linker(TRACKERS[name].run) for name in ("nn", "ss", "ipan")},
     "rs": _rs,

@@ -2,8 +2,8 @@
 
     python tests/benchmarks/bench_stonesoup_mfa.py [--limit SECONDS] [POINTS ...]
 
-Runs ``stonesoup_mfa`` once per size on the experiments' base PSMG scene (20 frames, speed 5
-px/frame, 200 x 200 px grown to keep the density, speed limit 10 px/frame), self-initialised and
+Runs ``stonesoup_mfa`` once per size on the density sweep's PSMG scene (20 frames, speed 5
+px/frame, 200 x 200 px, speed limit 10 px/frame), self-initialised and
 with the first links given, each in a fresh process, and prints a markdown table: seconds, peak
 resident memory of the process (MB, imports included) and track error. A size that takes longer
 than ``--limit`` seconds (default 300) is stopped and the larger ones are not tried.
@@ -19,13 +19,13 @@ import time
 from dataclasses import replace
 
 from seedtrack.data.psmg import generate_psmg
-from seedtrack.experiments import BASE, _same_density
+from seedtrack.experiments import BASE
 from seedtrack.peers import stonesoup_mfa
 from seedtrack.tracking.metrics import score_tracks
 
 
 def _one(points: int, given: bool, queue) -> None:
-    spec = replace(_same_density(BASE, BASE.size * (points / BASE.trajectories) ** 0.5), trajectories=points, random_seed=1)
+    spec = replace(BASE, trajectories=points, random_seed=1)
     frames, truth = generate_psmg(spec)
     start = time.perf_counter()
     tracks = stonesoup_mfa(frames, 2 * BASE.mean_speed, 0, truth.measurement[:, :2] if given else None)
