@@ -3,7 +3,9 @@
 An experiment is a list of cases (one per value of the swept parameter), each a PSMG spec and
 the speed limit handed to every tracker. A run draws one data set per case from a seed that
 depends only on the experiment, the case and the run number, tracks it with every tracker and
-scores the result against the truth; the same options therefore give the same files.
+scores the result against the truth; the same options therefore give the same files. Under the
+"given" protocol (the paper's) every tracker is handed the true links of frames 0 and 1; under
+"self" each initialises itself (:data:`PROTOCOLS`, :func:`run_task`).
 """
 
 from __future__ import annotations
@@ -17,13 +19,15 @@ from typing import Callable
 import numpy as np
 
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
-from seedtrack.tracking.goa import GOAConfig, goa
+from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.rs import rangarajan_shah
 from seedtrack.tracking.tracks import Tracks
 from seedtrack.tracking.trackers import TRACKERS
 
-from .peers import PEERS, PeerFailure, peers_available
+from .peers import GIVEN_PEERS, PEERS, PeerFailure, peers_available
 
 # PSMG settings the sources leave open, chosen so that our IPAN reproduces Chetverikov and
 # Verestoy's published merits (see the ipan-table experiment and the README): initial speed
@@ -63,7 +67,11 @@ PUBLISHED_IPAN = {
     (12.0, 20, False): 85.70, (12.0, 40, False): 74.02, (12.0, 60, False): 62.45,
 }  # fmt: skip
 
-Runner = Callable[[list[np.ndarray], Tracks, float], Tracks]
+# How the trackers start (``seedtrack experiment --protocol``): "given", the paper's (its section 6),
+# hands every tracker the true correspondences of frames 0 and 1; "self" lets each initialise itself.
+PROTOCOLS = ("self", "given")
+
+Runner = Callable[[list[np.ndarray], float, "np.ndarray | None"], Tracks]
 
 
 @dataclass(frozen=True)
@@ -113,35 +121,106 @@ class Experiment:
     with_peers: bool = True
 
 
-def _given_links(config: GOAConfig) -> Runner:
-    """GOA given the true correspondences of frames 0 and 1, as in the paper's sweeps."""
+def _default(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+    """seedtrack with no options: ``seedtrack track`` (the open GOA-updown, the motion measured),
+    or given the first links ``seedtrack track --algorithm goa --first-links``."""
+    if given is None:
+        return TRACKERS["goa-updown"].run(frames, speed_limit, 0)
+    return link_goa(frames, "goa", GOAConfig(d_max=speed_limit), first_links=given)[0]
 
-    def run(frames: list[np.ndarray], truth: Tracks, speed_limit: float) -> Tracks:
-        return goa(frames, truth.measurement[:, :2], replace(config, d_max=speed_limit))
+
+# The published scheme (Veenman et al. 2001): IM2 + CM1, first links by nearest-neighbour
+# assignment, a down pass that starts only from the up pass's links, one track per first-frame
+# point, the motion model as given (no measuring pass).
+PUBLISHED = GOAConfig(initialisation="im1", restart_lost=False)
+
+
+def _published(config: GOAConfig = PUBLISHED) -> Runner:
+    """The published scheme with ``config``'s models: GOA-updown as published, or under the given
+    protocol the paper's GOA forward pass from the given first links."""
+
+    def run(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+        limited = replace(config, d_max=speed_limit)
+        if given is not None:
+            return link_goa(frames, "goa", limited, motion="smooth", first_links=given)[0]
+        return link_goa(frames, "goa-updown-fixed", limited, None, motion="smooth")[0]
 
     return run
 
 
-def _registered(name: str) -> Runner:
-    return lambda frames, truth, speed_limit: TRACKERS[name].run(frames, speed_limit, 0)
+def _with_given_links(frames: list[np.ndarray], given: np.ndarray, tracks: Tracks) -> Tracks:
+    """``tracks`` of ``frames[1:]`` (first frame 1) with each frame-0 point joined to the track
+    of its given frame-1 partner (or a track of its own)."""
+    rows = tracks.to_rows()
+    measured = (rows["frame"] == 1) & (rows["interpolated"] == 0)
+    where = {(float(x), float(y)): i for i, (x, y) in enumerate(frames[1])}
+    owner = np.full(frames[1].shape[0], -1, np.int64)
+    for track, x, y in zip(rows["track_id"][measured], rows["x"][measured], rows["y"][measured]):
+        owner[where[(float(x), float(y))]] = track
+    fresh = int(rows["track_id"].max(initial=-1)) + 1 + np.arange(frames[0].shape[0])
+    ids = fresh.copy()
+    linked = given[(given[:, 0] >= 0) & (given[:, 1] >= 0)]
+    joined = owner[linked[:, 1]]
+    ids[linked[:, 0]] = np.where(joined >= 0, joined, fresh[linked[:, 0]])
+    return Tracks.from_rows(
+        np.concatenate((ids, rows["track_id"])),
+        np.concatenate((np.zeros(frames[0].shape[0], np.int64), rows["frame"])),
+        np.concatenate((frames[0][:, 0], rows["x"])),
+        np.concatenate((frames[0][:, 1], rows["y"])),
+        np.concatenate((np.zeros(frames[0].shape[0], np.int64), rows["interpolated"])),
+    )
+
+
+def _linker(run: Callable[[list[np.ndarray], float, int], Tracks]) -> Runner:
+    """A tracker that takes no first links: under the given protocol it links frames 1 onwards
+    and the given links join frame 0 on (exactly the given protocol for a linker that decides
+    each frame pair alone, as nn and trackpy without memory do)."""
+
+    def runner(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+        if given is None:
+            return run(frames, speed_limit, 0)
+        return _with_given_links(frames, given, run(frames[1:], speed_limit, 1))
+
+    return runner
 
 
 def _peer(name: str) -> Runner:
-    return lambda frames, truth, speed_limit: PEERS[name](frames, speed_limit, 0)
+    """A peer; under the given protocol with the first links when it can take them."""
+    spliced = _linker(PEERS[name])
+
+    def run(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+        if given is not None and name in GIVEN_PEERS:
+            return GIVEN_PEERS[name](frames, speed_limit, given)
+        return spliced(frames, speed_limit, given)
+
+    return run
+
+
+def _rs(frames: list[np.ndarray], speed_limit: float, given: np.ndarray | None) -> Tracks:
+    return rangarajan_shah(frames, speed_limit, initial=given)
 
 
 RUNNERS: dict[str, Runner] = {
-    "goa": _given_links(GOAConfig()),
-    **{name: _registered(name) for name in TRACKERS},
-    "goa im1": _given_links(GOAConfig(individual=IndividualModel("im1"))),
-    "goa im2": _given_links(GOAConfig(individual=IndividualModel("im2"))),
-    "goa im3": _given_links(GOAConfig(individual=IndividualModel("im3"))),
-    "goa im2 cm1 z=2": _given_links(GOAConfig(combined=CombinedModel("cm1", z=2.0))),
-    "goa im2 cm2 w=0.5": _given_links(GOAConfig(combined=CombinedModel("cm2", w1=0.5, w2=0.5))),
-    "goa im2 cm2 w=0.1": _given_links(GOAConfig(combined=CombinedModel("cm2", w1=0.1, w2=0.1))),
+    "default": _default,
+    "published": _published(),
+    **{name: _linker(TRACKERS[name].run) for name in ("nn", "ss", "ipan")},
+    "rs": _rs,
+    "goa im1": _published(replace(PUBLISHED, individual=IndividualModel("im1"))),
+    "goa im2": _published(),
+    "goa im3": _published(replace(PUBLISHED, individual=IndividualModel("im3"))),
+    "goa im2 cm1 z=2": _published(replace(PUBLISHED, combined=CombinedModel("cm1", z=2.0))),
+    "goa im2 cm2 w=0.5": _published(replace(PUBLISHED, combined=CombinedModel("cm2", w1=0.5, w2=0.5))),
+    "goa im2 cm2 w=0.1": _published(replace(PUBLISHED, combined=CombinedModel("cm2", w1=0.1, w2=0.1))),
+    "goa im2 cm2-margin w=0.5": _published(replace(PUBLISHED, combined=CombinedModel("cm2-margin", w1=0.5, w2=0.5))),
+    "goa im2 cm2-margin w=0.1": _published(replace(PUBLISHED, combined=CombinedModel("cm2-margin", w1=0.1, w2=0.1))),
     **{name: _peer(name) for name in PEERS},
 }
-OURS = ("goa", "goa-updown", "goa-updown-fixed", "nn", "ss", "rs", "ipan")
+OURS = ("default", "published", "nn", "ss", "rs", "ipan")
+# The peers the sweeps run, and the largest scene (points) each runs on: Stone Soup's trackers
+# are 30 to 1000 times slower than the others (its MFA took 6 s on 10 points, 13 s on 25, 41 s
+# on 50 and 348 s on 100 on the shared 2-core machine; tests/benchmarks/bench_stonesoup_mfa.py).
+SWEEP_PEERS = {"trackpy": None, "trackpy-adaptive": None, "trackpy-predict": None, "laptrack": None,
+               "stonesoup": 25, "stonesoup-mfa": 10}
 
 
 def _base(tiny: bool) -> PSMGSpec:
@@ -223,10 +302,11 @@ EXPERIMENTS: dict[str, Experiment] = {
     for e in (
         Experiment(
             "models",
-            "GOA (given first links) with each motion model",
+            "the published GOA-updown (GOA with the first links given) with each motion model",
             "trajectories",
             _sweep("trajectories", (20, 40, 60, 80, 100), (4, 8)),
-            ("goa im1", "goa im2", "goa im3", "goa im2 cm1 z=2", "goa im2 cm2 w=0.5", "goa im2 cm2 w=0.1"),
+            ("goa im1", "goa im2", "goa im3", "goa im2 cm1 z=2", "goa im2 cm2 w=0.5", "goa im2 cm2 w=0.1",
+             "goa im2 cm2-margin w=0.5", "goa im2 cm2-margin w=0.1"),
             with_peers=False,
         ),
         Experiment("density", "track error vs number of points", "trajectories",
@@ -238,18 +318,11 @@ EXPERIMENTS: dict[str, Experiment] = {
                    measure="seconds"),
         Experiment("dmax", "track error vs speed limit", "d_max / mean speed", _dmax_cases, OURS),
         Experiment(
-            "selfinit",
-            "self-initialising trackers vs GOA given the first links",
-            "trajectories",
-            _sweep("trajectories", (20, 40, 60, 80, 100), (4, 8)),
-            OURS,
-        ),
-        Experiment(
             "ipan-table",
             "strict trajectory merit, % (Chetverikov-Verestoy table)",
             "trajectories",
             _ipan_table_cases,
-            ("ipan", "goa-updown", "goa-updown-fixed"),
+            ("ipan", "default", "published"),
             measure="merit",
             with_peers=False,
         ),
@@ -258,8 +331,15 @@ EXPERIMENTS: dict[str, Experiment] = {
 
 
 def trackers_of(experiment: Experiment) -> tuple[str, ...]:
-    """The experiment's trackers, with the peers when they are installed."""
-    return experiment.trackers + (tuple(PEERS) if experiment.with_peers and peers_available() else ())
+    """The experiment's trackers, with the sweeps' peers when they are installed."""
+    peers = tuple(name for name in SWEEP_PEERS if name in PEERS)
+    return experiment.trackers + (peers if experiment.with_peers and peers_available() else ())
+
+
+def runs_on(tracker: str, spec: PSMGSpec) -> bool:
+    """Whether ``tracker`` runs on scenes of ``spec``'s size (the slow peers stop at a size)."""
+    largest = SWEEP_PEERS.get(tracker)
+    return largest is None or spec.trajectories <= largest
 
 
 def run_seed(name: str, case_index: int, run: int) -> int:
@@ -276,27 +356,34 @@ class Task:
     run: int
     tiny: bool
     trackers: tuple[str, ...] = field(default=())
+    protocol: str = "self"
 
 
 def run_task(task: Task) -> list[dict]:
     """Draw the task's data set, run every tracker on it and score each.
 
+    The data depend on the experiment, case and run only, so both protocols see the same points.
+    Under the "given" protocol each tracker gets the true links of frames 0 and 1 (every PSMG
+    point is present in both).
+
     Returns
     -------
     list of dict
-        One row per tracker: the case's settings, run, seed, tracker, counts, errors,
-        seconds, and ``failed``/``note`` for a tracker that gave up.
+        One row per tracker that runs at the case's size: the case's settings, run, seed,
+        protocol, tracker, counts, errors, seconds, and ``failed``/``note`` for a tracker that
+        gave up.
     """
     experiment = EXPERIMENTS[task.experiment]
     case = experiment.cases(task.tiny)[task.case_index]
     seed = run_seed(task.experiment, task.case_index, task.run)
     frames, truth = generate_psmg(replace(case.spec, random_seed=seed))
+    given = truth.measurement[:, :2] if task.protocol == "given" else None
     rows = []
-    for tracker in task.trackers:
-        row = {**case.settings, "run": task.run, "seed": seed, "tracker": tracker}
+    for tracker in (t for t in task.trackers if runs_on(t, case.spec)):
+        row = {**case.settings, "run": task.run, "seed": seed, "protocol": task.protocol, "tracker": tracker}
         start = time.perf_counter()
         try:
-            result = RUNNERS[tracker](frames, truth, case.speed_limit)
+            result = RUNNERS[tracker](frames, case.speed_limit, given)
         except PeerFailure as failure:
             rows.append({**row, "true_tracks": truth.n_tracks, "correct_tracks": 0, "track_error": math.nan,
                          "relaxed_error": math.nan, "link_error": math.nan, "seconds": time.perf_counter() - start,
@@ -333,7 +420,8 @@ def summarise(experiment: Experiment, rows: list[dict], tiny: bool) -> list[dict
             if not mine:
                 continue
             ok = [r for r in mine if not r["failed"]]
-            entry = {**case.settings, "tracker": tracker, "runs": len(mine), "failures": len(mine) - len(ok)}
+            entry = {**case.settings, "tracker": tracker, "protocol": mine[0]["protocol"], "runs": len(mine),
+                     "failures": len(mine) - len(ok)}
             for column in ("track_error", "relaxed_error", "link_error", "seconds"):
                 values = np.array([r[column] for r in ok], float)
                 entry[column] = float(values.mean()) if values.size else math.nan

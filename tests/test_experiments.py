@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from seedtrack.cli import main
-from seedtrack.experiments import EXPERIMENTS, Task, ci95, run_task, trackers_of
+from seedtrack.experiments import EXPERIMENTS, RUNNERS, Task, ci95, run_task, runs_on, trackers_of
 from seedtrack.peers import PEERS, PeerFailure, peers_available
 from seedtrack.data.csvio import read_table
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
@@ -83,23 +83,43 @@ def test_a_run_scores_every_tracker_on_the_same_data():
 
 @pytest.mark.parametrize("name", sorted(EXPERIMENTS))
 def test_every_experiment_runs_at_a_tiny_size(name, tmp_path, capsys):
-    assert main(["experiment", name, "--out", str(tmp_path), "--runs", "1", "--tiny"]) == 0
+    protocol = "given" if name == "models" else "self"
+    assert main(["experiment", name, "--out", str(tmp_path), "--runs", "1", "--tiny", "--protocol", protocol]) == 0
     experiment = EXPERIMENTS[name]
     cases = experiment.cases(True)
-    results = read_table(tmp_path / f"{name}.csv", required=("run", "seed", "failed"))
-    assert len(results["tracker"]) == len(cases) * len(trackers_of(experiment))
-    summary = read_table(tmp_path / f"{name}-summary.csv", required=("runs", "failures"))
+    results = read_table(tmp_path / f"{name}-{protocol}.csv", required=("run", "seed", "failed"))
+    # The slow peers stop at a scene size; every other tracker runs on every case.
+    assert len(results["tracker"]) == sum(runs_on(t, case.spec) for case in cases for t in trackers_of(experiment))
+    assert set(results["protocol"]) == {protocol}
+    summary = read_table(tmp_path / f"{name}-{protocol}-summary.csv", required=("runs", "failures"))
     assert set(summary["runs"]) == {1}
-    image = cv2.imread(str(tmp_path / f"{name}.png"))
+    image = cv2.imread(str(tmp_path / f"{name}-{protocol}.png"))
     assert image is not None and image.shape[1] == 960
     if name == "ipan-table":
         assert "published_ipan" in summary and "merit" in summary
     assert ("seconds" in results) == (name == "volume")
     if name != "models":
-        # Every tracker comparison scores the open GOA-updown, the paper's and IPAN in each case.
-        for tracker in ("goa-updown", "goa-updown-fixed", "ipan"):
+        # Every tracker comparison scores the default, the published scheme and IPAN in each case.
+        for tracker in ("default", "published", "ipan"):
             rows = summary["tracker"] == tracker
             assert rows.sum() == len(cases) and not summary["failures"][rows].any(), tracker
+
+
+@pytest.mark.parametrize("name", sorted(RUNNERS))
+def test_under_the_given_protocol_every_tracker_keeps_the_given_first_links(name):
+    # Two points cross between frames 0 and 1, so nearest-neighbour first links are wrong; the
+    # given ones must survive.
+    frames = [np.array([[20.0, 20.0], [20.0, 28.0]])] + [np.array([[26.0 + 6 * k, 27.0], [26.0 + 6 * k, 21.0]]) for k in range(5)]
+    given = np.array([[0, 0], [1, 1]])
+    if name.startswith(("trackpy", "laptrack", "stonesoup")) and not peers_available():
+        pytest.skip("the peers extra is not installed")
+    tracks = RUNNERS[name](frames, 14.0, given)
+    owner = {}
+    for track, column, measurement, xy in zip(tracks.point_track, tracks.point_column, tracks.point_measurement, tracks.point_xy):
+        if column <= 1:
+            index = measurement if measurement >= 0 else int(np.flatnonzero((frames[column] == xy).all(axis=1))[0])
+            owner[(int(column), int(index))] = int(track)
+    assert owner[(0, 0)] == owner[(1, 0)] != owner[(0, 1)] == owner[(1, 1)]
 
 
 def test_ci95_is_1_96_standard_errors_and_0_without_a_spread():
@@ -117,8 +137,20 @@ def test_same_options_give_the_same_files(tmp_path):
             capture_output=True, text=True,
         )
         assert result.returncode == 0, result.stderr
-        outputs.append([(out / f"occlusion{suffix}").read_bytes() for suffix in (".csv", "-summary.csv", ".png")])
+        outputs.append([(out / f"occlusion-self{suffix}").read_bytes() for suffix in (".csv", "-summary.csv", ".png")])
     assert outputs[0] == outputs[1]
+
+
+def test_values_run_a_subset_of_the_sweep_on_the_same_data(tmp_path, capsys):
+    for folder, values in (("all", []), ("one", ["--values", "8"])):
+        assert main(["experiment", "density", "--out", str(tmp_path / folder), "--runs", "1", "--tiny", *values]) == 0
+    every = read_table(tmp_path / "all" / "density-self.csv", required=("trajectories", "seed"))
+    chosen = read_table(tmp_path / "one" / "density-self.csv", required=("trajectories", "seed"))
+    assert set(chosen["trajectories"]) == {8}
+    np.testing.assert_array_equal(chosen["track_error"], every["track_error"][every["trajectories"] == 8])
+    assert main(["experiment", "density", "--out", str(tmp_path), "--runs", "1", "--tiny", "--values", "7"]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "--values 7 not swept" in error
 
 
 def test_bad_run_count_is_a_one_line_error(tmp_path, capsys):

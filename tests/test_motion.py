@@ -53,11 +53,44 @@ def test_cm1_exponent_and_cm2_reduces_to_cm1():
     cost = np.array([0.02, 0.05, 0.08])
     head = np.array([0, 0, 1])
     measurement = np.array([0, 1, 1])
-    np.testing.assert_allclose(CombinedModel("cm1", z=2).weights(cost, head, measurement), cost**2)
-    np.testing.assert_allclose(CombinedModel("cm2", w1=0, w2=0).weights(cost, head, measurement), cost)
-    cm2 = CombinedModel("cm2", w1=0.5, w2=0.5).weights(cost, head, measurement)
+    np.testing.assert_allclose(CombinedModel("cm1", z=2).weights(cost, head, measurement, 0.1), cost**2)
+    np.testing.assert_allclose(CombinedModel("cm2", w1=0, w2=0).weights(cost, head, measurement, 0.1), cost)
+    cm2 = CombinedModel("cm2", w1=0.5, w2=0.5).weights(cost, head, measurement, 0.1)
     # Pair (0, 0): alternative of head 0 costs 0.05, no competitor for measurement 0.
     assert cm2[0] == pytest.approx(0.02 - 0.5 * 0.05)
+
+
+def test_cm2_margin_rewards_only_each_heads_and_measurements_favourite():
+    cost = np.array([0.02, 0.05, 0.08, 0.03, 0.03])
+    head = np.array([0, 0, 1, 2, 2])
+    measurement = np.array([0, 1, 1, 2, 3])
+    model = CombinedModel("cm2-margin", w1=1.0, w2=0.0)
+    # Head 0's favourite beats its other option by 0.03; head 1's lone pair beats its slave
+    # (phi_max 0.1) by 0.02; head 2's two equal pairs beat nothing.
+    np.testing.assert_allclose(model.weights(cost, head, measurement, 0.1), [-0.01, 0.05, 0.06, 0.03, 0.03])
+    # Measurement 1's favourite is head 0 (0.05 against 0.08): it gains w2 times 0.03.
+    np.testing.assert_allclose(CombinedModel("cm2-margin", w1=0.0, w2=1.0).weights(cost, head, measurement, 0.1),
+                               [-0.06, 0.02, 0.08, -0.04, -0.04])
+    np.testing.assert_allclose(CombinedModel("cm2-margin").weights(cost, head, measurement, 0.1), cost)
+
+
+def test_cm2_margin_can_change_the_optimum_where_cm2_as_written_cannot():
+    # Three heads and three measurements, every pair gated. CM1's optimum (costs 0.038 + 0.059 +
+    # 0.049) stays CM2-as-written's for any weights; the margin form rewards head 0's clear
+    # favourite (0.027, next 0.038) and measurement 2's (head 0) and takes 0.027 + 0.074 + 0.049.
+    from scipy.optimize import linear_sum_assignment
+
+    matrix = np.array([[0.039, 0.027, 0.038], [0.066, 0.059, 0.074], [0.049, 0.088, 0.063]])
+    head, measurement = (index.ravel() for index in np.indices(matrix.shape))
+
+    def best(name, **weights):
+        weight = np.zeros(matrix.shape)
+        weight[head, measurement] = CombinedModel(name, **weights).weights(matrix.ravel(), head, measurement, 0.1)
+        return tuple(int(j) for j in linear_sum_assignment(weight)[1])
+
+    assert best("cm1") == (2, 1, 0)
+    assert best("cm2", w1=0.9, w2=0.9) == best("cm2", w1=0.1, w2=0.5) == (2, 1, 0)
+    assert best("cm2-margin", w1=0.5, w2=0.5) == (1, 2, 0)
 
 
 def test_model_names_are_checked():

@@ -240,7 +240,7 @@ def solve(config: GOAConfig, n_heads: int, n_measurements: int, head: np.ndarray
     ndarray of int, shape (n_heads,)
         Measurement index per head, -1 for a slave.
     """
-    weight = config.combined.weights(cost, head, measurement)
+    weight = config.combined.weights(cost, head, measurement, config.phi_max)
     return SOLVERS[config.solver](n_heads, n_measurements, head, measurement, weight, config.unmatched_weight, config.corner_weight)
 
 

@@ -372,7 +372,7 @@ class CombinedModel(_Registered):
 
     Examples
     --------
-    >>> CombinedModel("cm1", z=2.0).weights(np.array([0.1, 0.2]), np.array([0, 1]), np.array([0, 1]))
+    >>> CombinedModel("cm1", z=2.0).weights(np.array([0.1, 0.2]), np.array([0, 1]), np.array([0, 1]), 0.3)
     array([0.01, 0.04])
     """
 
@@ -385,7 +385,7 @@ class CombinedModel(_Registered):
         return phi_max
 
     @abc.abstractmethod
-    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray, phi_max: float) -> np.ndarray:
         """Assignment weight of each pair that survived pruning.
 
         Parameters
@@ -394,6 +394,9 @@ class CombinedModel(_Registered):
             Individual costs, all within phi_max.
         head, measurement : ndarray of int, shape (P,)
             The pairs' head and measurement indices (CM2 averages over each one's other pairs).
+        phi_max : float
+            The individual cost of a slave and of a false track: every head's and every
+            measurement's option besides its pairs.
         """
 
 
@@ -412,14 +415,17 @@ class GeneralisedMean(CombinedModel, key="cm1"):
     def unmatched_weight(self, phi_max: float) -> float:
         return phi_max**self.z
 
-    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray, phi_max: float) -> np.ndarray:
         return cost**self.z
 
 
 @dataclass(frozen=True)
 class ConditionedDeviation(CombinedModel, key="cm2"):
-    """CM2, deviation conditioned on alternatives and competition: ``c - w1 * mean alternatives
-    - w2 * mean competitors``, over the gated pairs of the head and of the measurement."""
+    """CM2 as the paper writes it, deviation conditioned on alternatives and competition:
+    ``c - w1 * mean alternatives - w2 * mean competitors``, over the gated pairs of the head and
+    of the measurement. Linear in the costs, it leaves the optimum of an assignment that matches
+    every head and measurement where CM1's is (see the README's derivation); "cm2-margin" can
+    move it."""
 
     name: str = "cm2"
     w1: float = 0.0
@@ -430,8 +436,47 @@ class ConditionedDeviation(CombinedModel, key="cm2"):
         if self.w1 < 0 or self.w2 < 0:
             raise ValueError("CM2 weights must be non-negative")
 
-    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray, phi_max: float) -> np.ndarray:
         return cost - self.w1 * _mean_of_others(cost, head) - self.w2 * _mean_of_others(cost, measurement)
+
+
+@dataclass(frozen=True)
+class MarginDeviation(CombinedModel, key="cm2-margin"):
+    """CM2 against the best alternative and the best competitor: a pair is cheaper by how far it
+    beats them, ``c - w1 * max(0, a - c) - w2 * max(0, b - c)``.
+
+    ``a`` is the cheapest other option of the pair's head (its other gated measurements, or its
+    slave at phi_max), ``b`` the cheapest other taker of the pair's measurement (its other gated
+    heads, or a false track at phi_max). Only the head's (measurement's) favourite gains, by its
+    margin, so an unambiguous link is preferred to an equally cheap contested one: the paper's
+    intent for CM2 (own cost low, alternatives and competitors poor), but through a minimum, which
+    is not linear in the costs and can change the optimum where the mean form cannot. With w1 = w2
+    = 0 it is CM1 (z = 1).
+
+    Examples
+    --------
+    Head 0 prefers measurement 0 by 0.03 over its other option, head 1 its only pair by 0.02
+    over its slave; measurement 0 has no other taker (0.08 below a false track), measurement 1
+    prefers head 0 by 0.03:
+
+    >>> cost, head, measurement = np.array([0.02, 0.05, 0.08]), np.array([0, 0, 1]), np.array([0, 1, 1])
+    >>> MarginDeviation(w1=0.5, w2=0.5).weights(cost, head, measurement, 0.1).round(3)
+    array([-0.035,  0.035,  0.07 ])
+    """
+
+    name: str = "cm2-margin"
+    w1: float = 0.0
+    w2: float = 0.0
+
+    def __post_init__(self) -> None:
+        self._check_name()
+        if self.w1 < 0 or self.w2 < 0:
+            raise ValueError("CM2 weights must be non-negative")
+
+    def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray, phi_max: float) -> np.ndarray:
+        head_margin = np.maximum(_best_other(cost, head, phi_max) - cost, 0.0)
+        measurement_margin = np.maximum(_best_other(cost, measurement, phi_max) - cost, 0.0)
+        return cost - self.w1 * head_margin - self.w2 * measurement_margin
 
 
 # Every model by the name the options and configurations use.
@@ -447,6 +492,26 @@ def _mean_of_others(cost: np.ndarray, group: np.ndarray) -> np.ndarray:
     totals = np.bincount(inverse, weights=cost)
     others = counts[inverse] - 1
     return np.divide(totals[inverse] - cost, others, out=np.zeros_like(cost), where=others > 0)
+
+
+def _best_other(cost: np.ndarray, group: np.ndarray, ceiling: float) -> np.ndarray:
+    """For each pair, the cheapest other pair of its group, or ``ceiling`` when that is cheaper
+    or there is none (of two equally cheap pairs each is the other's best)."""
+    if cost.size == 0:
+        return cost
+    order = np.lexsort((cost, group))
+    sorted_group = group[order]
+    first = np.ones(order.size, bool)
+    first[1:] = sorted_group[1:] != sorted_group[:-1]
+    start = np.flatnonzero(first)
+    size = np.diff(np.append(start, order.size))
+    best = cost[order[start]]
+    second = np.where(size > 1, cost[order[np.minimum(start + 1, order.size - 1)]], np.inf)
+    group_of = np.repeat(np.arange(start.size), size)
+    other = np.where(first, second[group_of], best[group_of])
+    result = np.empty_like(cost)
+    result[order] = np.minimum(other, ceiling)
+    return result
 
 
 def acceptable_links(

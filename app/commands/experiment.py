@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from seedtrack.data.csvio import write_table
 
 from ..error_plot import draw_line_plot, write_png
 from ..errors import UsageError
-from ..experiments import EXPERIMENTS, Experiment, Task, run_task, summarise, trackers_of
+from ..experiments import EXPERIMENTS, PROTOCOLS, Experiment, Task, run_task, summarise, trackers_of
 from ..progress import progress_bar
 from ..wording import counted
 
@@ -24,13 +25,27 @@ def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "experiment",
         description="Generate PSMG data, run every tracker (and trackpy/laptrack when installed) on it, and "
-        "write DIR/NAME.csv (one row per run and tracker), DIR/NAME-summary.csv (means with 95% intervals) "
-        "and DIR/NAME.png. Experiments: " + ", ".join(f"{e.name} ({e.title})" for e in EXPERIMENTS.values()) + ".",
+        "write DIR/NAME-PROTOCOL.csv (one row per run and tracker), DIR/NAME-PROTOCOL-summary.csv (means with 95% "
+        "intervals) and DIR/NAME-PROTOCOL.png. Experiments: " + ", ".join(f"{e.name} ({e.title})" for e in EXPERIMENTS.values()) + ".",
     )
     parser.add_argument("name", choices=sorted(EXPERIMENTS), metavar="NAME", help="one of: " + ", ".join(EXPERIMENTS))
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     parser.add_argument("--runs", type=int, default=DEFAULT_RUNS, metavar="N", help=f"runs per setting (default {DEFAULT_RUNS})")
     parser.add_argument("--jobs", type=int, default=1, metavar="N", help="worker processes (default 1)")
+    parser.add_argument(
+        "--protocol",
+        choices=PROTOCOLS,
+        default="self",
+        help="self (default): every tracker initialises itself; given: every tracker is given the true links of "
+        "frames 0 and 1, as in the paper's sweeps (its section 6)",
+    )
+    parser.add_argument(
+        "--values",
+        type=_values,
+        default=None,
+        metavar="X,X,...",
+        help="run only these of the experiment's swept values (the same data as in the full sweep)",
+    )
     parser.add_argument("--tiny", action="store_true", help="a few points over a few frames: a check that runs in seconds")
     parser.set_defaults(run=run)
 
@@ -43,20 +58,40 @@ def run(args: argparse.Namespace) -> int:
     experiment = EXPERIMENTS[args.name]
     trackers = trackers_of(experiment)
     cases = experiment.cases(args.tiny)
-    tasks = [Task(experiment.name, index, run, args.tiny, trackers) for run in range(args.runs) for index in range(len(cases))]
+    chosen = _chosen_cases(cases, args.values)
+    tasks = [Task(experiment.name, index, run, args.tiny, trackers, args.protocol) for run in range(args.runs) for index in chosen]
+    stem = f"{experiment.name}-{args.protocol}"
     with output_folder(args.out):
-        rows = _run_tasks(tasks, args.jobs, experiment.name)
+        rows = _run_tasks(tasks, args.jobs, stem)
         timed = experiment.measure == "seconds"
         # Times differ from run to run; only the experiment that measures them writes them, so
         # every other output is the same byte for byte for the same options.
-        write_table(args.out / f"{experiment.name}.csv", _columns(rows, keep_seconds=timed))
+        write_table(args.out / f"{stem}.csv", _columns(rows, keep_seconds=timed))
         summary = summarise(experiment, rows, args.tiny)
-        write_table(args.out / f"{experiment.name}-summary.csv", _columns(summary, keep_seconds=timed))
-        write_png(args.out / f"{experiment.name}.png", _plot(experiment, summary, args.runs))
+        write_table(args.out / f"{stem}-summary.csv", _columns(summary, keep_seconds=timed))
+        write_png(args.out / f"{stem}.png", _plot(experiment, summary, args.runs, args.protocol))
         for line in _report(experiment, summary):
             print(line)
-    print(f"wrote {args.out / (experiment.name + '.csv')}, {experiment.name}-summary.csv and {experiment.name}.png")
+    print(f"wrote {args.out / (stem + '.csv')}, {stem}-summary.csv and {stem}.png")
     return 0
+
+
+def _values(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(value) for value in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+
+
+def _chosen_cases(cases: list, values: tuple[float, ...] | None) -> list[int]:
+    """Indices of the cases whose swept value is among ``values`` (all without)."""
+    if values is None:
+        return list(range(len(cases)))
+    unknown = [v for v in values if not any(math.isclose(v, case.x) for case in cases)]
+    if unknown:
+        raise UsageError(f"--values {', '.join(f'{v:g}' for v in unknown)} not swept by this experiment "
+                         f"(it sweeps {', '.join(f'{case.x:g}' for case in cases)})")
+    return [index for index, case in enumerate(cases) if any(math.isclose(v, case.x) for v in values)]
 
 
 def _run_tasks(tasks: list[Task], jobs: int, name: str) -> list[dict]:
@@ -83,7 +118,7 @@ def _columns(rows: list[dict], keep_seconds: bool) -> dict[str, np.ndarray]:
     return columns
 
 
-def _plot(experiment: Experiment, summary: list[dict], runs: int) -> np.ndarray:
+def _plot(experiment: Experiment, summary: list[dict], runs: int, protocol: str) -> np.ndarray:
     if experiment.measure == "merit":
         return _merit_plot(experiment, summary, runs)
     column = "seconds" if experiment.measure == "seconds" else "track_error"
@@ -95,7 +130,9 @@ def _plot(experiment: Experiment, summary: list[dict], runs: int) -> np.ndarray:
         by_x = {float(e[swept]): e for e in summary if e["tracker"] == tracker}
         series[tracker] = np.array([by_x[v][column] if v in by_x else np.nan for v in x])
         intervals[tracker] = np.array([by_x[v][column + "_ci95"] if v in by_x else 0.0 for v in x])
-    return draw_line_plot(x, series, f"{experiment.name}: {experiment.title}, {counted(runs, 'run')}", experiment.x_label, label, intervals)
+    started = "first links given" if protocol == "given" else "self-initialised"
+    title = f"{experiment.name}: {experiment.title}, {started}, {counted(runs, 'run')}"
+    return draw_line_plot(x, series, title, experiment.x_label, label, intervals)
 
 
 def _merit_plot(experiment: Experiment, summary: list[dict], runs: int) -> np.ndarray:
