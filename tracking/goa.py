@@ -151,11 +151,19 @@ class HeadState:
         Pass step of that measurement, -1 for none.
     velocity : ndarray of float, shape (m, 2)
         From the two newest true measurements, pixels/frame (gap-normalised); NaN where fewer.
+    span : ndarray of int, shape (m,), optional
+        Frames between those two measurements (1 unless the head held slaves between them);
+        all 1 when not given.
     """
 
     last_xy: np.ndarray
     last_step: np.ndarray
     velocity: np.ndarray
+    span: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.span is None:
+            self.span = np.ones(self.last_step.shape[0], dtype=np.int64)
 
     @classmethod
     def from_history(cls, frames: Sequence[np.ndarray], assignment: np.ndarray, start: int, until: int) -> "HeadState":
@@ -173,20 +181,22 @@ class HeadState:
         had = held & (self.last_step >= 0)
         gap = step - self.last_step[had]
         self.velocity[had] = (points[measurement[had]] - self.last_xy[had]) / gap[:, None]
+        self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows])
+        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows])
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
-        self.last_xy[rows], self.last_step[rows], self.velocity[rows] = other.last_xy, other.last_step, other.velocity
+        self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span
 
     def __add__(self, other: "HeadState") -> "HeadState":
         return HeadState(
             np.concatenate((self.last_xy, other.last_xy)),
             np.concatenate((self.last_step, other.last_step)),
             np.concatenate((self.velocity, other.velocity)),
+            np.concatenate((self.span, other.span)),
         )
 
 
@@ -220,6 +230,7 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
         displacement=points[measurement] - state.last_xy[head] if head.size else np.empty((0, 2)),
         gap=gap[head],
         previous_velocity=state.velocity[head],
+        previous_span=state.span[head],
     )
 
 
