@@ -8,7 +8,8 @@ import pytest
 from seedtrack.experiments import BASE, EXPERIMENTS, Task, run_task
 from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.psmg import generate_psmg
-from seedtrack.tracking.goa import GOAConfig, goa, goa_updown
+from seedtrack.tracking.assignment import UNASSIGNED
+from seedtrack.tracking.goa import GOAConfig, goa, goa_pass, goa_updown
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
 
@@ -155,3 +156,14 @@ def test_im2_beats_im1_and_im3_on_a_density_sweep():
         rows = [row for run in range(3) for row in run_task(Task("models", index, run, False, models, "given"))]
         error = {name: np.mean([r["track_error"] for r in rows if r["tracker"] == name]) for name in models}
         assert error["goa im2"] < min(error["goa im1"], error["goa im3"]), (cases[index].x, error)
+
+
+def test_given_heads_keep_their_columns_and_the_others_are_associated_around_them():
+    # Two points moving right 5 px a frame, 10 px apart. Head 0 is given frames 0-2 (missed in
+    # frame 1); head 1 only frame 0 and the slave after it. Head 1 is associated from frame 2 on,
+    # among the points head 0 does not hold.
+    frames = [np.array([[5.0 * k, 0.0], [5.0 * k, 10.0]]) for k in range(5)]
+    frames[1] = frames[1][1:]
+    initial = np.array([[0, UNASSIGNED, 0], [1, UNASSIGNED, UNASSIGNED]])
+    rows = goa_pass(frames, initial, GOAConfig(d_max=8.0), given=np.array([3, 2]))
+    assert rows.tolist() == [[0, -1, 0, 0, 0], [1, -1, 1, 1, 1]]

@@ -108,22 +108,22 @@ class EndTracks:
         gap = step - state.last_step[back]
         bridge = (points[taken[back]] - state.last_xy[back]) / gap[:, None]
         origin = points[taken[back]]
-        untracked = _continues(origin, -bridge, [frames[step - 1][free[step - 1]]], config)
+        untracked = _continues(origin, -bridge, gap, [frames[step - 1][free[step - 1]]], config)
         taken = taken.copy()
-        taken[np.flatnonzero(back)[~_continues(origin, bridge, after, config) | untracked]] = UNASSIGNED
+        taken[np.flatnonzero(back)[~_continues(origin, bridge, gap, after, config) | untracked]] = UNASSIGNED
         return taken
 
 
-def _continues(origin: np.ndarray, velocity: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
+def _continues(origin: np.ndarray, velocity: np.ndarray, span: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
     """Boolean per origin: a measurement of one of the frames ``after`` (the next frames, in
-    order) continues ``velocity`` within phi_max, so a point hidden again right after it
-    reappears keeps its track."""
+    order) continues ``velocity`` (gap-normalised over ``span`` frames) within phi_max, so a
+    point hidden again right after it reappears keeps its track."""
     found = np.zeros(origin.shape[0], bool)
     speed = np.hypot(*velocity.T)
     radius = config.speed.reach(config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max))
     for gap, points in enumerate(after, start=1):
         owner, target = pairs_within(origin, radius * gap, points)
-        pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner])
+        pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner], span[owner])
         found[acceptable_links(config.individual, pairs, config.phi_max, config.speed)[0].head] = True
     return found
 

@@ -18,7 +18,7 @@ import numpy as np
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
-from .adaptive import track_measured_motion
+from .adaptive import REFITS, track_measured_motion
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks, point_frames
 
@@ -137,10 +137,10 @@ def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
 
 
 def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False) -> int:
-    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames (twice a pass's
-    when the motion is measured on a first pass)."""
+    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames (a pass's times
+    2 + REFITS when the motion is measured on a first pass)."""
     steps = max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
-    return 2 * steps if motion == "auto" and not keep_model else steps
+    return (2 + REFITS) * steps if motion == "auto" and not keep_model else steps
 
 
 __all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]

@@ -37,6 +37,9 @@ class Candidates:
     previous_velocity : ndarray of float, shape (P, 2)
         The head's velocity from its two newest true measurements, pixels/frame; NaN where the
         head has fewer than two.
+    previous_span : ndarray of int, shape (P,), optional
+        Frames between those two measurements (the previous velocity is gap-normalised over
+        them); all 1 when not given.
     """
 
     head: np.ndarray
@@ -44,6 +47,7 @@ class Candidates:
     displacement: np.ndarray
     gap: np.ndarray
     previous_velocity: np.ndarray
+    previous_span: np.ndarray | None = None
 
     @property
     def velocity(self) -> np.ndarray:
@@ -63,6 +67,7 @@ class Candidates:
             displacement=self.displacement[keep],
             gap=self.gap[keep],
             previous_velocity=self.previous_velocity[keep],
+            previous_span=None if self.previous_span is None else self.previous_span[keep],
         )
 
 

@@ -72,7 +72,8 @@ for a random walk, 1 for smooth motion), how far velocities turn (a turning dish
 noise grows with the speed, leaving out the links that fit worst; the final pass scores every link
 by its distance from the position those statistics predict, in sigmas, in a frame moving with the
 drift, within twice the fastest speed measured on the links that fit (or --max-speed, which only
-removes links: it does not change the cost of the others). Two tracks whose points pass too close
+removes links: it does not change the cost of the others); the statistics are measured once more on
+those tracks and the points tracked again with them. Two tracks whose points pass too close
 to tell apart in one frame then take the pairing that the frames around it make most likely.
 --motion smooth or random, or --individual-model, skip the measurement and track as the first pass
 does.
