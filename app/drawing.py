@@ -570,9 +570,10 @@ def place_labels(taken: Occupancy, texts: list[str], xy: np.ndarray, gap: float,
     return chosen, origins
 
 
-def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int) -> None:
-    """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo."""
-    draw_texts(canvas, [text], [origin], [colour], font, thickness)
+def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int, once: bool = False) -> None:
+    """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo
+    (``once``: as :func:`draw_texts`)."""
+    draw_texts(canvas, [text], [origin], [colour], font, thickness, once)
 
 
 def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
@@ -588,7 +589,7 @@ def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
     return picture.shape[1], picture.shape[0]
 
 
-def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int) -> None:
+def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int, once: bool = False) -> None:
     """Write each text on ``canvas`` (BGR uint8) with its baseline starting at its origin (pixels),
     on a black halo.
 
@@ -602,22 +603,26 @@ def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, in
     thickness : int
         The dark halo around the glyphs is at least ``thickness // 2 + 1`` pixels wide (and a
         tenth of the font size).
+    once : bool
+        The texts will not be written again (a frame counter): their pictures are not kept for
+        the next call, as recurring texts' are (on a long clip, thousands of cached counters
+        were most of the memory drawing took).
     """
     height, width = canvas.shape[:2]
     placed = []
     for text, (x, y), colour in zip(texts, origins, colours):
-        picture, left, top = _halo(text, font, thickness)
+        picture, left, top = _draw_halo(text, font, thickness) if once else _halo(text, font, thickness)
         x0, y0 = x - left, y - top
         x1, y1 = x0 + picture.shape[1], y0 + picture.shape[0]
         cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
         if cx0 < cx1 and cy0 < cy1:
-            placed.append((text, (slice(cy0, cy1), slice(cx0, cx1)), (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0)), colour))
+            placed.append((text, picture, (slice(cy0, cy1), slice(cx0, cx1)), (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0)), colour))
     # Halos first, the darker of two where they overlap, so that no halo covers another label's glyphs.
-    for text, box, clip, _ in placed:
-        picture = _halo(text, font, thickness)[0]
+    for _, picture, box, clip, _ in placed:
         cv2.min(canvas[box], picture[clip][..., :3], dst=canvas[box])
-    for text, box, clip, colour in placed:
-        keep, ink = _glyphs(text, font, thickness, tuple(int(c) for c in colour))
+    for text, picture, box, clip, colour in placed:
+        colour = tuple(int(c) for c in colour)
+        keep, ink = _glyph_layers(picture, colour) if once else _glyphs(text, font, thickness, colour)
         target = canvas[box]
         cv2.multiply(target, keep[clip], dst=target, scale=1 / 255)
         cv2.add(target, ink[clip], dst=target)
@@ -627,7 +632,12 @@ def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, in
 def _glyphs(text: str, font: float, thickness: int, colour: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
     """What a pixel under the glyphs keeps of itself (0-255, three channels) and the colour the
     glyphs add (premultiplied by their coverage): writing is then one multiply and one add."""
-    coverage = _halo(text, font, thickness)[0][..., 3:4].astype(np.uint16)
+    return _glyph_layers(_halo(text, font, thickness)[0], colour)
+
+
+def _glyph_layers(picture: np.ndarray, colour: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_glyphs` of a text's :func:`_halo` picture."""
+    coverage = picture[..., 3:4].astype(np.uint16)
     keep = np.repeat((255 - coverage).astype(np.uint8), 3, axis=2)
     ink = ((coverage * np.array(colour, np.uint16) + 127) // 255).astype(np.uint8)
     return keep, ink
@@ -638,11 +648,10 @@ def _truetype(pixels: int) -> ImageFont.FreeTypeFont:
     return ImageFont.load_default(size=pixels)
 
 
-@functools.lru_cache(maxsize=4096)
-def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
+def _draw_halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
     """``text`` drawn once: channels 0-2 the most each pixel may keep of its brightness (255 - the
     halo), channel 3 the glyphs' coverage (0-255); and the text origin's position in that picture
-    (left, top). Ids recur every frame, hence the cache."""
+    (left, top)."""
     pixels = max(6, round(_PIXELS_PER_FONT_SCALE * font))
     face = _truetype(pixels)
     # The halo grows with the font, so that large text stands out as well as small.
@@ -658,6 +667,10 @@ def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]
     picture = np.dstack([keep, keep, keep, glyphs])
     picture.flags.writeable = False
     return picture, pad - left, pad - top
+
+
+# Ids recur every frame, hence the cache.
+_halo = functools.lru_cache(maxsize=4096)(_draw_halo)
 
 
 class FalseDetections:
@@ -784,7 +797,7 @@ def annotate(
 
 def _draw_title(canvas: np.ndarray, text: str, style: Style) -> None:
     text_height = text_size("0", style.font, style.text)[1]
-    draw_text(canvas, text, (text_height // 2, text_height), _NEUTRAL, style.font, style.text)
+    draw_text(canvas, text, (text_height // 2, text_height), _NEUTRAL, style.font, style.text, once=True)
 
 
 def annotate_frames(frames: Iterable[tuple[int, np.ndarray]], view: View, layers: Sequence[TrackLayer], **options) -> Iterator[tuple[int, np.ndarray]]:
