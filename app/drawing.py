@@ -213,12 +213,19 @@ class TrackLayer:
         warnings: np.ndarray | None = None,
         frame_indices: np.ndarray | None = None,
     ) -> None:
-        self.xy = view.points(tracks.xy)
-        self.hollow = tracks.interpolated
+        # The tracks' points as they are held (sorted by track, then column), never a dense
+        # (track, frame) array: on a long clip with many short tracks that would be most of
+        # memory. Each frame draws the points of its trail's columns.
+        self.xy = view.points(tracks.point_xy)
+        self.track = tracks.point_track
+        self.point_column = tracks.point_column
+        self.hollow = tracks.point_interpolated
+        self.by_column = np.argsort(tracks.point_column, kind="stable")
+        self.column_starts = np.searchsorted(tracks.point_column[self.by_column], np.arange(tracks.n_frames + 1))
         self.ids = tracks.track_ids
         self.trail = int(trail)
         self.labels = labels
-        self.warnings = np.zeros(tracks.present.shape, bool) if warnings is None else warnings
+        self.warnings = warnings
         if colour is None:
             self.palette = PALETTE_BGR.astype(int)
             self.colour_index = self.ids % len(PALETTE_BGR)
@@ -230,15 +237,15 @@ class TrackLayer:
         self._texts = [str(track_id) for track_id in self.ids]
         n_frames = tracks.n_frames
         self.frame_indices = tracks.first_frame + np.arange(n_frames) if frame_indices is None else np.asarray(frame_indices)
-        present = tracks.present
-        has_points = present.any(axis=1)
-        first = np.argmax(present, axis=1)
-        last = n_frames - 1 - np.argmax(present[:, ::-1], axis=1)
+        first, last = tracks.spans()
+        self.offsets = tracks.offsets
         # A track cut by the first or last frame of the set has not really started or ended there.
-        self.starts = np.flatnonzero(has_points & (first > 0))
+        self.starts = np.flatnonzero(first > 0)
         self.start_column = first[self.starts]
-        self.ends = np.flatnonzero(has_points & (last < n_frames - 1))
+        self.start_xy = self.xy[self.offsets[self.starts]]
+        self.ends = np.flatnonzero((last >= 0) & (last < n_frames - 1))
         self.end_column = last[self.ends]
+        self.end_xy = self.xy[self.offsets[self.ends + 1] - 1]
 
     def column(self, frame_index: int) -> int | None:
         """Column holding 0-based clip frame ``frame_index``, or None."""
@@ -257,10 +264,16 @@ class TrackLayer:
         points : ndarray of int32, shape (K, 2, 2)
             Fixed-point start and end of each link.
         """
-        window = self.xy[:, low : high + 1]
-        rows, starts, ends = track_links(~np.isnan(window[..., 0]))
-        points = np.stack([window[rows, starts], window[rows, ends]], axis=1)
-        return rows, ends + low, to_fixed(points)
+        # Point order is track then column, as track_links reads a dense window.
+        held = np.sort(self.by_column[self.column_starts[low] : self.column_starts[high + 1]])
+        track = self.track[held]
+        same = track[1:] == track[:-1]
+        points = np.stack([self.xy[held[:-1][same]], self.xy[held[1:][same]]], axis=1)
+        return track[1:][same], self.point_column[held[1:][same]], to_fixed(points)
+
+    def _at(self, column: int) -> np.ndarray:
+        """The points of ``column``, by track."""
+        return self.by_column[self.column_starts[column] : self.column_starts[column + 1]]
 
     def draw(self, canvas: np.ndarray, frame_index: int, style: Style) -> None:
         """Draw trails, heads, marks and ids of frame ``frame_index`` onto ``canvas`` in place."""
@@ -277,9 +290,10 @@ class TrackLayer:
         taken = Occupancy(canvas.shape[:2])
         # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
         self._draw_marks(canvas, column - self.trail, column, style, taken)
-        present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
-        heads = self.xy[present, column]
-        draw_heads(canvas, heads, self.colour_index[present], self._colours, self.hollow[present, column], style)
+        held = self._at(column)
+        present = self.track[held]
+        heads = self.xy[held]
+        draw_heads(canvas, heads, self.colour_index[present], self._colours, self.hollow[held], style)
         if self.labels:
             taken.add_points(heads, ring_radius(style))
             colours = [self._colours[index] for index in self.colour_index[present]]
@@ -293,18 +307,21 @@ class TrackLayer:
         width = style.marker * size
         half = width * (0.5 + spacing)
         spaced = Occupancy(canvas.shape[:2])
-        for rows, columns, kind in ((self.starts, self.start_column, cv2.MARKER_TRIANGLE_UP), (self.ends, self.end_column, cv2.MARKER_SQUARE)):
+        for rows, columns, places, kind in (
+            (self.starts, self.start_column, self.start_xy, cv2.MARKER_TRIANGLE_UP),
+            (self.ends, self.end_column, self.end_xy, cv2.MARKER_SQUARE),
+        ):
             shown = (columns >= low) & (columns <= high)
-            for row, at in zip(rows[shown], columns[shown]):
-                x, y = self.xy[row, at]
+            for row, xy in zip(rows[shown], places[shown]):
+                x, y = xy
                 if spaced.free(x - half, y - half, x + half, y + half, inside=False):
                     spaced.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
                     taken.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
-                    _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style, size)
+                    _draw_marker(canvas, xy, self._colour(row), kind, style, size)
 
     def _link_colours(self, rows: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each link is a warning, and its index into ``_link_palette`` (warnings last)."""
-        warned = self.warnings[rows, ends]
+        warned = self.warnings[rows, ends] if self.warnings is not None else np.zeros(rows.size, bool)
         return warned, np.where(warned, len(self.palette), self.colour_index[rows])
 
     def _colour(self, row: int) -> tuple[int, int, int]:
@@ -312,20 +329,21 @@ class TrackLayer:
 
     def draw_summary(self, canvas: np.ndarray, style: Style) -> None:
         """Draw every whole trajectory with its start and end marks onto ``canvas`` in place."""
-        rows, ends, points = self.segments(0, self.xy.shape[1] - 1)
+        last = len(self.column_starts) - 2
+        rows, ends, points = self.segments(0, last)
         _, group = self._link_colours(rows, ends)
         for index in np.unique(group):
             chosen = group == index
             cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in self._link_palette[index]), style.line, cv2.LINE_AA, SHIFT)
         taken = Occupancy(canvas.shape[:2])
         # Every start and end of a long clip at once: smaller marks, further apart than in a frame.
-        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style, taken, size=1.0, spacing=2.0)
+        self._draw_marks(canvas, 0, last, style, taken, size=1.0, spacing=2.0)
         if self.labels:
-            present = ~np.isnan(self.xy[..., 0])
+            counts = np.diff(self.offsets)
             # The longest tracks are labelled first: where labels must be left out, the short ones go.
-            rows = np.flatnonzero(present.any(axis=1))
-            rows = rows[np.argsort(-present[rows].sum(axis=1), kind="stable")]
-            starts = self.xy[rows, np.argmax(present[rows], axis=1)]
+            rows = np.flatnonzero(counts)
+            rows = rows[np.argsort(-counts[rows], kind="stable")]
+            starts = self.xy[self.offsets[rows]]
             # Ids of whole trajectories crowd more than a frame's: each keeps a label's height clear.
             margin = text_size("0", style.font, style.text)[1]
             _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style, taken, margin)
@@ -691,11 +709,11 @@ class FalseDetections:
     def __init__(self, frame, x, y, tracks: Tracks, view: View, frame_indices=None, tolerance: float = FALSE_DETECTION_TOLERANCE) -> None:
         frame = np.asarray(frame, np.int64)
         columns = tracks.first_frame + np.arange(tracks.n_frames) if frame_indices is None else np.asarray(frame_indices)
-        rows, column = np.nonzero(tracks.present & ~tracks.interpolated)
+        measured = ~tracks.point_interpolated
         # Frames become a third coordinate spaced wider than the tolerance, so one tree query
         # matches within frames only.
         spacing = 4.0 * tolerance + 1.0
-        held_points = np.column_stack([tracks.xy[rows, column], columns[column] * spacing])
+        held_points = np.column_stack([tracks.point_xy[measured], columns[tracks.point_column[measured]] * spacing])
         queries = np.column_stack([x, y, frame * spacing])
         if len(held_points) and len(queries):
             distance, _ = cKDTree(held_points).query(queries, distance_upper_bound=tolerance)
