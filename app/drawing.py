@@ -213,12 +213,19 @@ class TrackLayer:
         warnings: np.ndarray | None = None,
         frame_indices: np.ndarray | None = None,
     ) -> None:
-        self.xy = view.points(tracks.xy)
-        self.hollow = tracks.interpolated
+        # The tracks' points as they are held (sorted by track, then column), never a dense
+        # (track, frame) array: on a long clip with many short tracks that would be most of
+        # memory. Each frame draws the points of its trail's columns.
+        self.xy = view.points(tracks.point_xy)
+        self.track = tracks.point_track
+        self.point_column = tracks.point_column
+        self.hollow = tracks.point_interpolated
+        self.by_column = np.argsort(tracks.point_column, kind="stable")
+        self.column_starts = np.searchsorted(tracks.point_column[self.by_column], np.arange(tracks.n_frames + 1))
         self.ids = tracks.track_ids
         self.trail = int(trail)
         self.labels = labels
-        self.warnings = np.zeros(tracks.present.shape, bool) if warnings is None else warnings
+        self.warnings = warnings
         if colour is None:
             self.palette = PALETTE_BGR.astype(int)
             self.colour_index = self.ids % len(PALETTE_BGR)
@@ -230,15 +237,15 @@ class TrackLayer:
         self._texts = [str(track_id) for track_id in self.ids]
         n_frames = tracks.n_frames
         self.frame_indices = tracks.first_frame + np.arange(n_frames) if frame_indices is None else np.asarray(frame_indices)
-        present = tracks.present
-        has_points = present.any(axis=1)
-        first = np.argmax(present, axis=1)
-        last = n_frames - 1 - np.argmax(present[:, ::-1], axis=1)
+        first, last = tracks.spans()
+        self.offsets = tracks.offsets
         # A track cut by the first or last frame of the set has not really started or ended there.
-        self.starts = np.flatnonzero(has_points & (first > 0))
+        self.starts = np.flatnonzero(first > 0)
         self.start_column = first[self.starts]
-        self.ends = np.flatnonzero(has_points & (last < n_frames - 1))
+        self.start_xy = self.xy[self.offsets[self.starts]]
+        self.ends = np.flatnonzero((last >= 0) & (last < n_frames - 1))
         self.end_column = last[self.ends]
+        self.end_xy = self.xy[self.offsets[self.ends + 1] - 1]
 
     def column(self, frame_index: int) -> int | None:
         """Column holding 0-based clip frame ``frame_index``, or None."""
@@ -257,10 +264,16 @@ class TrackLayer:
         points : ndarray of int32, shape (K, 2, 2)
             Fixed-point start and end of each link.
         """
-        window = self.xy[:, low : high + 1]
-        rows, starts, ends = track_links(~np.isnan(window[..., 0]))
-        points = np.stack([window[rows, starts], window[rows, ends]], axis=1)
-        return rows, ends + low, to_fixed(points)
+        # Point order is track then column, as track_links reads a dense window.
+        held = np.sort(self.by_column[self.column_starts[low] : self.column_starts[high + 1]])
+        track = self.track[held]
+        same = track[1:] == track[:-1]
+        points = np.stack([self.xy[held[:-1][same]], self.xy[held[1:][same]]], axis=1)
+        return track[1:][same], self.point_column[held[1:][same]], to_fixed(points)
+
+    def _at(self, column: int) -> np.ndarray:
+        """The points of ``column``, by track."""
+        return self.by_column[self.column_starts[column] : self.column_starts[column + 1]]
 
     def draw(self, canvas: np.ndarray, frame_index: int, style: Style) -> None:
         """Draw trails, heads, marks and ids of frame ``frame_index`` onto ``canvas`` in place."""
@@ -277,9 +290,10 @@ class TrackLayer:
         taken = Occupancy(canvas.shape[:2])
         # Starts and ends stay marked for one trail length, so that they are seen for more than a frame.
         self._draw_marks(canvas, column - self.trail, column, style, taken)
-        present = np.flatnonzero(~np.isnan(self.xy[:, column, 0]))
-        heads = self.xy[present, column]
-        draw_heads(canvas, heads, self.colour_index[present], self._colours, self.hollow[present, column], style)
+        held = self._at(column)
+        present = self.track[held]
+        heads = self.xy[held]
+        draw_heads(canvas, heads, self.colour_index[present], self._colours, self.hollow[held], style)
         if self.labels:
             taken.add_points(heads, ring_radius(style))
             colours = [self._colours[index] for index in self.colour_index[present]]
@@ -293,18 +307,21 @@ class TrackLayer:
         width = style.marker * size
         half = width * (0.5 + spacing)
         spaced = Occupancy(canvas.shape[:2])
-        for rows, columns, kind in ((self.starts, self.start_column, cv2.MARKER_TRIANGLE_UP), (self.ends, self.end_column, cv2.MARKER_SQUARE)):
+        for rows, columns, places, kind in (
+            (self.starts, self.start_column, self.start_xy, cv2.MARKER_TRIANGLE_UP),
+            (self.ends, self.end_column, self.end_xy, cv2.MARKER_SQUARE),
+        ):
             shown = (columns >= low) & (columns <= high)
-            for row, at in zip(rows[shown], columns[shown]):
-                x, y = self.xy[row, at]
+            for row, xy in zip(rows[shown], places[shown]):
+                x, y = xy
                 if spaced.free(x - half, y - half, x + half, y + half, inside=False):
                     spaced.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
                     taken.take(x - width / 2, y - width / 2, x + width / 2, y + width / 2)
-                    _draw_marker(canvas, self.xy[row, at], self._colour(row), kind, style, size)
+                    _draw_marker(canvas, xy, self._colour(row), kind, style, size)
 
     def _link_colours(self, rows: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Whether each link is a warning, and its index into ``_link_palette`` (warnings last)."""
-        warned = self.warnings[rows, ends]
+        warned = self.warnings[rows, ends] if self.warnings is not None else np.zeros(rows.size, bool)
         return warned, np.where(warned, len(self.palette), self.colour_index[rows])
 
     def _colour(self, row: int) -> tuple[int, int, int]:
@@ -312,20 +329,21 @@ class TrackLayer:
 
     def draw_summary(self, canvas: np.ndarray, style: Style) -> None:
         """Draw every whole trajectory with its start and end marks onto ``canvas`` in place."""
-        rows, ends, points = self.segments(0, self.xy.shape[1] - 1)
+        last = len(self.column_starts) - 2
+        rows, ends, points = self.segments(0, last)
         _, group = self._link_colours(rows, ends)
         for index in np.unique(group):
             chosen = group == index
             cv2.polylines(canvas, points[chosen], False, tuple(int(c) for c in self._link_palette[index]), style.line, cv2.LINE_AA, SHIFT)
         taken = Occupancy(canvas.shape[:2])
         # Every start and end of a long clip at once: smaller marks, further apart than in a frame.
-        self._draw_marks(canvas, 0, self.xy.shape[1] - 1, style, taken, size=1.0, spacing=2.0)
+        self._draw_marks(canvas, 0, last, style, taken, size=1.0, spacing=2.0)
         if self.labels:
-            present = ~np.isnan(self.xy[..., 0])
+            counts = np.diff(self.offsets)
             # The longest tracks are labelled first: where labels must be left out, the short ones go.
-            rows = np.flatnonzero(present.any(axis=1))
-            rows = rows[np.argsort(-present[rows].sum(axis=1), kind="stable")]
-            starts = self.xy[rows, np.argmax(present[rows], axis=1)]
+            rows = np.flatnonzero(counts)
+            rows = rows[np.argsort(-counts[rows], kind="stable")]
+            starts = self.xy[self.offsets[rows]]
             # Ids of whole trajectories crowd more than a frame's: each keeps a label's height clear.
             margin = text_size("0", style.font, style.text)[1]
             _draw_labels(canvas, [self._texts[row] for row in rows], starts, [self._colour(row) for row in rows], style, taken, margin)
@@ -570,9 +588,10 @@ def place_labels(taken: Occupancy, texts: list[str], xy: np.ndarray, gap: float,
     return chosen, origins
 
 
-def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int) -> None:
-    """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo."""
-    draw_texts(canvas, [text], [origin], [colour], font, thickness)
+def draw_text(canvas: np.ndarray, text: str, origin: tuple[int, int], colour, font: float, thickness: int, once: bool = False) -> None:
+    """Write ``text`` with its baseline starting at ``origin`` (pixels), on a black halo
+    (``once``: as :func:`draw_texts`)."""
+    draw_texts(canvas, [text], [origin], [colour], font, thickness, once)
 
 
 def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
@@ -588,7 +607,7 @@ def text_size(text: str, font: float, thickness: int = 1) -> tuple[int, int]:
     return picture.shape[1], picture.shape[0]
 
 
-def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int) -> None:
+def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, int]], colours: list, font: float, thickness: int, once: bool = False) -> None:
     """Write each text on ``canvas`` (BGR uint8) with its baseline starting at its origin (pixels),
     on a black halo.
 
@@ -602,22 +621,26 @@ def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, in
     thickness : int
         The dark halo around the glyphs is at least ``thickness // 2 + 1`` pixels wide (and a
         tenth of the font size).
+    once : bool
+        The texts will not be written again (a frame counter): their pictures are not kept for
+        the next call, as recurring texts' are (on a long clip, thousands of cached counters
+        were most of the memory drawing took).
     """
     height, width = canvas.shape[:2]
     placed = []
     for text, (x, y), colour in zip(texts, origins, colours):
-        picture, left, top = _halo(text, font, thickness)
+        picture, left, top = _draw_halo(text, font, thickness) if once else _halo(text, font, thickness)
         x0, y0 = x - left, y - top
         x1, y1 = x0 + picture.shape[1], y0 + picture.shape[0]
         cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
         if cx0 < cx1 and cy0 < cy1:
-            placed.append((text, (slice(cy0, cy1), slice(cx0, cx1)), (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0)), colour))
+            placed.append((text, picture, (slice(cy0, cy1), slice(cx0, cx1)), (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0)), colour))
     # Halos first, the darker of two where they overlap, so that no halo covers another label's glyphs.
-    for text, box, clip, _ in placed:
-        picture = _halo(text, font, thickness)[0]
+    for _, picture, box, clip, _ in placed:
         cv2.min(canvas[box], picture[clip][..., :3], dst=canvas[box])
-    for text, box, clip, colour in placed:
-        keep, ink = _glyphs(text, font, thickness, tuple(int(c) for c in colour))
+    for text, picture, box, clip, colour in placed:
+        colour = tuple(int(c) for c in colour)
+        keep, ink = _glyph_layers(picture, colour) if once else _glyphs(text, font, thickness, colour)
         target = canvas[box]
         cv2.multiply(target, keep[clip], dst=target, scale=1 / 255)
         cv2.add(target, ink[clip], dst=target)
@@ -627,7 +650,12 @@ def draw_texts(canvas: np.ndarray, texts: list[str], origins: list[tuple[int, in
 def _glyphs(text: str, font: float, thickness: int, colour: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
     """What a pixel under the glyphs keeps of itself (0-255, three channels) and the colour the
     glyphs add (premultiplied by their coverage): writing is then one multiply and one add."""
-    coverage = _halo(text, font, thickness)[0][..., 3:4].astype(np.uint16)
+    return _glyph_layers(_halo(text, font, thickness)[0], colour)
+
+
+def _glyph_layers(picture: np.ndarray, colour: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_glyphs` of a text's :func:`_halo` picture."""
+    coverage = picture[..., 3:4].astype(np.uint16)
     keep = np.repeat((255 - coverage).astype(np.uint8), 3, axis=2)
     ink = ((coverage * np.array(colour, np.uint16) + 127) // 255).astype(np.uint8)
     return keep, ink
@@ -638,11 +666,10 @@ def _truetype(pixels: int) -> ImageFont.FreeTypeFont:
     return ImageFont.load_default(size=pixels)
 
 
-@functools.lru_cache(maxsize=4096)
-def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
+def _draw_halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]:
     """``text`` drawn once: channels 0-2 the most each pixel may keep of its brightness (255 - the
     halo), channel 3 the glyphs' coverage (0-255); and the text origin's position in that picture
-    (left, top). Ids recur every frame, hence the cache."""
+    (left, top)."""
     pixels = max(6, round(_PIXELS_PER_FONT_SCALE * font))
     face = _truetype(pixels)
     # The halo grows with the font, so that large text stands out as well as small.
@@ -658,6 +685,10 @@ def _halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int, int]
     picture = np.dstack([keep, keep, keep, glyphs])
     picture.flags.writeable = False
     return picture, pad - left, pad - top
+
+
+# Ids recur every frame, hence the cache.
+_halo = functools.lru_cache(maxsize=4096)(_draw_halo)
 
 
 class FalseDetections:
@@ -678,11 +709,11 @@ class FalseDetections:
     def __init__(self, frame, x, y, tracks: Tracks, view: View, frame_indices=None, tolerance: float = FALSE_DETECTION_TOLERANCE) -> None:
         frame = np.asarray(frame, np.int64)
         columns = tracks.first_frame + np.arange(tracks.n_frames) if frame_indices is None else np.asarray(frame_indices)
-        rows, column = np.nonzero(tracks.present & ~tracks.interpolated)
+        measured = ~tracks.point_interpolated
         # Frames become a third coordinate spaced wider than the tolerance, so one tree query
         # matches within frames only.
         spacing = 4.0 * tolerance + 1.0
-        held_points = np.column_stack([tracks.xy[rows, column], columns[column] * spacing])
+        held_points = np.column_stack([tracks.point_xy[measured], columns[tracks.point_column[measured]] * spacing])
         queries = np.column_stack([x, y, frame * spacing])
         if len(held_points) and len(queries):
             distance, _ = cKDTree(held_points).query(queries, distance_upper_bound=tolerance)
@@ -784,7 +815,7 @@ def annotate(
 
 def _draw_title(canvas: np.ndarray, text: str, style: Style) -> None:
     text_height = text_size("0", style.font, style.text)[1]
-    draw_text(canvas, text, (text_height // 2, text_height), _NEUTRAL, style.font, style.text)
+    draw_text(canvas, text, (text_height // 2, text_height), _NEUTRAL, style.font, style.text, once=True)
 
 
 def annotate_frames(frames: Iterable[tuple[int, np.ndarray]], view: View, layers: Sequence[TrackLayer], **options) -> Iterator[tuple[int, np.ndarray]]:

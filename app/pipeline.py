@@ -157,12 +157,12 @@ def detect_clip(
             # The next frames decode beside detection, on another core if there is one.
             with read_ahead(source) as read:
                 detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers))
-        if not detections.columns:
+        if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
             say(f"detector: {detector.choice.reason}")
         if source.stopped_early:
-            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(len(detections.columns), 'frame')} before it", file=sys.stderr)
+            print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(detections.frame_indices.size, 'frame')} before it", file=sys.stderr)
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
 
 

@@ -10,6 +10,7 @@ reads files: :func:`seedtrack.pipeline.detect_clip` is the layer that reads a cl
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 from typing import Callable, Iterable, Sequence
@@ -150,34 +151,71 @@ class ClipDetector:
         self.choice = choose_detector(scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi)
 
 
-@dataclass(frozen=True)
+# Frames whose columns are joined into one array each at a time while a clip is detected: a
+# long clip then holds a few arrays per column instead of one per column and frame (at 20,000
+# frames those small arrays and the heap around them were tens of megabytes).
+_GATHERED_FRAMES = 1024
+
+
+@dataclass(frozen=True, eq=False)
 class Detections:
-    """Measurements of every processed frame.
+    """Measurements of every processed frame, as one table, frame after frame.
 
     Attributes
     ----------
     frame_indices : ndarray of int, shape (n_frames,)
         0-based index in the clip of each processed frame.
-    columns : list of dict of str to ndarray
-        Per processed frame, the detector's columns (``x``, ``y``, ``area``, ...).
+    counts : ndarray of int, shape (n_frames,)
+        Detections in each processed frame.
+    table : dict of str to ndarray
+        ``x``, ``y`` (pixels), ``area`` (pixels) and the detector's other columns of
+        ``detections.csv``, one entry per detection: those of frame ``frame_indices[0]`` first.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> found = Detections.gathered([4, 5], [{name: np.array([1.0, 2.0]) for name in MEASUREMENT_COLUMNS},
+    ...                                     {name: np.array([3.0]) for name in MEASUREMENT_COLUMNS}])
+    >>> found.counts.tolist(), found.frame(1)["x"].tolist(), found.to_rows()["frame"].tolist()
+    ([2, 1], [3.0], [4, 4, 5])
     """
 
     frame_indices: np.ndarray
-    columns: list[dict[str, np.ndarray]]
+    counts: np.ndarray
+    table: dict[str, np.ndarray]
 
-    @property
-    def points(self) -> list[np.ndarray]:
-        """Per frame, an (M_k, 2) array of (x, y) positions, pixels."""
-        return [np.column_stack((c["x"], c["y"])) for c in self.columns]
+    @classmethod
+    def gathered(cls, frame_indices: Iterable[int], frames: Iterable[dict[str, np.ndarray]]) -> "Detections":
+        """The detections of ``frames`` (each processed frame's detector columns, consumed one at
+        a time, before ``frame_indices`` is read)."""
+        names = list(dict.fromkeys(("x", "y", "area", *MEASUREMENT_COLUMNS)))
+        counts: list[int] = []
+        parts: dict[str, list[np.ndarray]] = {name: [] for name in names}
+        pending: list[dict[str, np.ndarray]] = []
+
+        def join() -> None:
+            for name in names:
+                parts[name].append(np.concatenate([columns[name] for columns in pending]))
+            pending.clear()
+
+        for columns in frames:
+            counts.append(len(columns["x"]))
+            pending.append({name: columns[name] for name in names})
+            if len(pending) == _GATHERED_FRAMES:
+                join()
+        if pending:
+            join()
+        table = {name: np.concatenate(chunks) if chunks else np.empty(0) for name, chunks in parts.items()}
+        return cls(np.array(list(frame_indices), dtype=np.int64), np.array(counts, dtype=np.int64), table)
+
+    def frame(self, column: int) -> dict[str, np.ndarray]:
+        """The columns of processed frame ``column`` (0-based among the processed frames)."""
+        end = int(self.counts[: column + 1].sum())
+        return {name: values[end - int(self.counts[column]) : end] for name, values in self.table.items()}
 
     def to_rows(self) -> dict[str, np.ndarray]:
         """Columns of ``detections.csv``: frame, x, y, area, then the detector's other columns."""
-        names = list(dict.fromkeys(("x", "y", "area", *MEASUREMENT_COLUMNS)))
-        counts = [len(c["x"]) for c in self.columns]
-        rows = {"frame": np.repeat(self.frame_indices, counts).astype(np.int64)}
-        for name in names:
-            rows[name] = np.concatenate([c[name] for c in self.columns]) if self.columns else np.empty(0)
-        return rows
+        return {"frame": np.repeat(self.frame_indices, self.counts).astype(np.int64), **self.table}
 
 
 def detect_frames(
@@ -209,7 +247,7 @@ def detect_frames(
     frames = iter(frames)
     first = next(frames, None)
     if first is None:
-        return Detections(np.empty(0, dtype=np.int64), [])
+        return Detections.gathered([], [])
     indices = [first[0]]
     columns = [detector.detect(first[1])]
 
@@ -220,8 +258,7 @@ def detect_frames(
             # are a third of the bytes to hand to a worker process.
             yield to_gray(image) if image.dtype == np.uint8 and image.ndim == 3 else image
 
-    columns.extend(map_frames(detector.detect, rest()))
-    return Detections(np.array(indices, dtype=np.int64), columns)
+    return Detections.gathered(indices, itertools.chain(columns, map_frames(detector.detect, rest())))
 
 
 __all__ = ["DETECTORS", "BACKGROUND_FRAMES", "ClipDetector", "Detections", "background_spacing", "detect_frames", "temporal_background"]

@@ -22,6 +22,23 @@ def test_split_agrees_with_dense(seed, corner):
     np.testing.assert_array_equal(dense, split)
 
 
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("one_pair_per", ["head", "measurement"])
+def test_split_agrees_with_dense_when_components_are_stars(seed, one_pair_per):
+    # Each head (or measurement) in at most one pair: the components are found without a graph.
+    rng = np.random.default_rng(seed)
+    n_heads, n_measurements = rng.integers(1, 40, size=2)
+    many, few = (n_heads, n_measurements) if one_pair_per == "head" else (n_measurements, n_heads)
+    side = np.flatnonzero(rng.random(many) < 0.7)
+    other = rng.integers(0, few, side.size)
+    head, measurement = (side, other) if one_pair_per == "head" else (other, side)
+    weight = rng.random(head.size) * 0.3  # some dearer than leaving both unmatched
+    for corner in (0.0, 0.1):
+        dense = solve_dense(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+        split = solve_split(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+        np.testing.assert_array_equal(dense, split)
+
+
 def test_measurement_used_once_and_slaves_for_the_rest():
     # Two heads want the same measurement; the cheaper one wins, the other takes a slave.
     result = solve_split(2, 1, np.array([0, 1]), np.array([0, 0]), np.array([0.01, 0.05]), 0.1)

@@ -20,7 +20,7 @@ def quiet(line):
 def test_beads_get_the_spot_detector_at_trackpys_diameter():
     found = detect_clip(BEADS, DetectionSettings(end=6), say=quiet)
     assert found.choice.name == "spot" and found.choice.spots.diameter == 11 and found.choice.spots.polarity == "dark"
-    counts = [len(columns["x"]) for columns in found.detections.columns]
+    counts = found.detections.counts
     assert 900 <= np.median(counts) <= 1300, counts
 
 

@@ -10,7 +10,7 @@ from PIL import Image
 
 from seedtrack.cli import main
 from seedtrack.commands.compare import disagreeing_links
-from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Style, TrackLayer, View, annotate, draw_text, ring_radius, track_colour
+from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Style, TrackLayer, View, annotate, draw_text, ring_radius, summary_picture, track_colour
 from seedtrack.data.csvio import write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
@@ -292,6 +292,17 @@ def test_tracks_with_missing_frames_are_linked_across_the_gap():
     assert sorted(zip(rows.tolist(), ends.tolist())) == [(0, 2), (0, 4), (1, 2)]
     starts = {(row, end): tuple(point[0] / 16) for row, end, point in zip(rows, ends, points)}
     assert starts[(0, 4)] == (20, 10)
+
+
+def test_summary_marks_where_a_track_starts_and_ends_inside_the_clip():
+    # Frames 2..5 of 8, straight along y = 200: the marks reach beyond the line at both ends only.
+    xy = np.full((1, 8, 2), np.nan)
+    xy[0, 2:6] = np.column_stack([np.linspace(100, 300, 4), np.full(4, 200.0)])
+    view = View.of((400, 300))
+    blank = np.zeros((300, 400, 3), np.uint8)
+    picture = summary_picture(blank, view, [TrackLayer(Tracks.from_dense(xy, np.zeros((1, 8), int)), view, labels=False)])
+    beside = picture[204:208].max(axis=(0, 2))
+    assert beside[97:104].any() and beside[297:304].any() and not beside[150:250].any()
 
 
 def test_disagreement_across_a_gap():

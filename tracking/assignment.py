@@ -103,15 +103,9 @@ def solve_split(
     result = np.full(n_heads, UNASSIGNED, dtype=np.int64)
     if head.size == 0:
         return result
-    graph = coo_matrix(
-        (np.ones(head.size), (head, n_heads + measurement)), shape=(n_heads + n_measurements,) * 2
-    )
-    n_components, label = connected_components(graph, directed=False)
-    head_count = np.bincount(label[:n_heads], minlength=n_components)
-    measurement_count = np.bincount(label[n_heads:], minlength=n_components)
+    pair_label, single_of = _components(n_heads, n_measurements, head, measurement)
 
     # Pairs grouped by component, cheapest first within each.
-    pair_label = label[head]
     order = np.lexsort((weight, pair_label))
     boundaries = np.flatnonzero(np.diff(pair_label[order])) + 1
     starts = np.concatenate(([0], boundaries))
@@ -120,8 +114,7 @@ def solve_split(
     # A component with one head (or one measurement) makes at most one match, its cheapest
     # pair: matching costs w (+ corner, the rest unmatched as they would be anyway), leaving it
     # costs 2 * unmatched; ties go to the match, as the solver's would.
-    component = pair_label[order[starts]]
-    single = np.minimum(head_count[component], measurement_count[component]) == 1
+    single = single_of[pair_label[order[starts]]]
     cheapest = order[starts[single]]
     take = weight[cheapest] + corner_weight <= 2 * unmatched_weight
     result[head[cheapest[take]]] = measurement[cheapest[take]]
@@ -134,6 +127,25 @@ def solve_split(
         involved = np.unique(head[pairs])
         result[involved] = joint[involved]
     return result
+
+
+def _components(n_heads: int, n_measurements: int, head: np.ndarray, measurement: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The connected component of each pair (a label), and per label whether that component
+    has a single head or a single measurement."""
+    # Where no head has two pairs, each component is one measurement and the heads that share
+    # it (and likewise the other way round): the graph need not be built, which on sparse
+    # scenes was most of each frame's time.
+    if np.bincount(head, minlength=n_heads).max() == 1:
+        return measurement, np.ones(n_measurements, bool)
+    if np.bincount(measurement, minlength=n_measurements).max() == 1:
+        return head, np.ones(n_heads, bool)
+    graph = coo_matrix(
+        (np.ones(head.size), (head, n_heads + measurement)), shape=(n_heads + n_measurements,) * 2
+    )
+    n_components, label = connected_components(graph, directed=False)
+    head_count = np.bincount(label[:n_heads], minlength=n_components)
+    measurement_count = np.bincount(label[n_heads:], minlength=n_components)
+    return label[head], np.minimum(head_count, measurement_count) == 1
 
 
 def solve_sparse(

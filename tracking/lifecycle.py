@@ -61,15 +61,14 @@ class OpenTracks:
             The window's first step.
         """
         start = step - min(self.confirmation, len(frames)) + 1
-        if start < 0:
+        # Checked before the window is gathered: on most steps of a tracked clip nothing is free.
+        if start < 0 or not free[start].any():
             return np.empty((0, len(frames)), np.int64), start
         # Scoring reaches past the window: a wrong first link can look smooth for one triplet by chance.
         horizon = max(step + 1, min(start + config.lookahead, len(frames)))
         index = [np.flatnonzero(free[k]) for k in range(start, horizon)]
         ahead = [frames[k][i] for k, i in zip(range(start, horizon), index)]
         window = ahead[: step - start + 1]
-        if window[0].shape[0] == 0:
-            return np.empty((0, len(frames)), np.int64), start
         if len(window) == 1:
             local = np.arange(window[0].shape[0])[:, None]
         else:

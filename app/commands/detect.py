@@ -242,7 +242,7 @@ def run(args: argparse.Namespace) -> int:
             message += f"; no preview: frame {preview_frame} was not read"
         else:
             column = int(np.searchsorted(found.detections.frame_indices, preview_frame))
-            page = draw_preview(found.preview, found.detections.columns[column], found.roi, found.circle, preview_frame, preview_caption(found.choice, settings))
+            page = draw_preview(found.preview, found.detections.frame(column), found.roi, found.circle, preview_frame, preview_caption(found.choice, settings))
             with atomic_path(args.preview) as temporary:
                 if not cv2.imwrite(str(temporary), page):
                     raise DataError(args.preview, "cannot write the preview image")

@@ -57,9 +57,8 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args), workers_count(args))
-    measured = sum(len(c["x"]) for c in detections.columns)
     print(
-        f"{counted(len(detections.columns), 'frame')}, {counted(measured, 'detection')}, {counted(tracks.n_tracks, 'track')}; "
+        f"{counted(detections.frame_indices.size, 'frame')}, {counted(int(detections.counts.sum()), 'detection')}, {counted(tracks.n_tracks, 'track')}; "
         f"wrote {args.out / 'detections.csv'}, {args.out / 'tracks.csv'}, {args.out / 'overlay.mp4'}"
     )
     return 0

@@ -35,7 +35,8 @@ def score(spec: DishSpec, folder: Path) -> tuple[int, int, int, list[float], lis
     in_contact[: spec.touching_pairs] = in_contact[spec.seeds - spec.touching_pairs :] = True
     true_count = found = matched = 0
     single, paired = [], []
-    for k, columns in enumerate(detections.columns):
+    for k in range(detections.frame_indices.size):
+        columns = detections.frame(k)
         shown = np.flatnonzero(scene.visible[:, k])
         truth = scene.truth.xy[shown, k]
         points = np.column_stack((columns["x"], columns["y"]))
@@ -77,7 +78,7 @@ def main() -> None:
     print(f"  recall {matched / true_count:.4f}  precision {matched / found:.4f}  ({true_count} true, {found} found, {matched} matched); RMS error {rms(errors):.3f} px")
     if REAL_CLIP.exists():
         found = detect_clip(REAL_CLIP, say=lambda line: None)
-        counts = [len(c["x"]) for c in found.detections.columns]
+        counts = found.detections.counts
         print(f"bulk-water-240-479.mp4: {np.median(counts):.0f} detections per frame (median; {min(counts)} to {max(counts)}); {found.choice.reason}")
 
 

@@ -11,7 +11,8 @@ Run as ``python tests/benchmarks/bench_parallel.py [--quick]``. Prints, for a ge
 
 and, for generated 128x128 clips of 2,000 and 20,000 frames with 6 seeds, ``run``'s peak memory
 (``--workers 1``, one process: its maximum resident set) and their ratio (the goal: at most 1.2).
-``--quick`` skips the 20,000-frame clip. Wall times on a shared machine include what other
+``--quick`` skips the 20,000-frame clip, ``--memory-only`` the 300-frame clip, and ``--repeats N``
+measures each long clip N times and prints the median of each and of their ratio. Wall times on a shared machine include what other
 programs take; run it when the machine is quiet, and read the CPU times beside them.
 """
 
@@ -21,6 +22,7 @@ import argparse
 import ctypes
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -91,31 +93,53 @@ def decode_seconds(clip: Path) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="skip the 20,000-frame clip")
+    parser.add_argument("--memory-only", action="store_true", help="skip the 300-frame clip (cores and frames/s)")
+    parser.add_argument("--repeats", type=int, default=1, metavar="N", help="peak memory measurements per long clip (default 1)")
     args = parser.parse_args()
     become_subreaper()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
-        clip = folder / "dish" / "clip.mp4"
-        write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
-        decode = min(decode_seconds(clip) for _ in range(2))
-        print(f"300 frames, 640x512, 80 seeds; {default_workers()} cores usable; load average {os.getloadavg()[0]:.1f}")
-        print(f"decoding alone: {300 / decode:.0f} frames/s")
-        print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's |")
-        print("| --- | --- | --- | --- | --- | --- |")
-        for workers in ("1", str(default_workers())):
-            wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
-            print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} |")
-        same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
-        print(f"files identical for 1 and {default_workers()} workers: {same}")
-        lengths = (2_000,) if args.quick else (2_000, 20_000)
-        peaks = {}
+        if not args.memory_only:
+            cores(folder)
+        long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+
+
+def cores(folder: Path) -> None:
+    """CPU over wall time and frames/s of ``run`` on a 300-frame 640x512 clip."""
+    clip = folder / "dish" / "clip.mp4"
+    write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
+    decode = min(decode_seconds(clip) for _ in range(2))
+    print(f"300 frames, 640x512, 80 seeds; {default_workers()} cores usable; load average {os.getloadavg()[0]:.1f}")
+    print(f"decoding alone: {300 / decode:.0f} frames/s")
+    print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for workers in ("1", str(default_workers())):
+        wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
+        print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} |")
+    same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
+    print(f"files identical for 1 and {default_workers()} workers: {same}")
+
+
+def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
+    """Peak memory of ``run`` on 6-seed clips of each length, ``repeats`` times (one run of each
+    length after the other, so that a ratio compares runs made under the same load)."""
+    clips = {}
+    for frames in lengths:
+        clips[frames] = folder / f"long{frames}" / "clip.mp4"
+        write_dish_clip(DishSpec(seeds=6, frames=frames, width=128, height=128, rim_speed=4.0), clips[frames].parent)
+    peaks = {frames: [] for frames in lengths}
+    ratios = []
+    for repeat in range(repeats):
         for frames in lengths:
-            long_clip = folder / f"long{frames}" / "clip.mp4"
-            write_dish_clip(DishSpec(seeds=6, frames=frames, width=128, height=128, rim_speed=4.0), long_clip.parent)
-            peaks[frames] = peak_memory(long_clip, folder / f"outlong{frames}")
-            print(f"{frames:,} frames, 128x128, 6 seeds: peak resident memory {peaks[frames] / 1024:.0f} MB")
-        if len(peaks) == 2:
-            print(f"20,000 frames / 2,000 frames: {peaks[20_000] / peaks[2_000]:.2f} x (goal <= 1.2)")
+            peaks[frames].append(peak_memory(clips[frames], folder / f"outlong{frames}"))
+            print(f"{frames:,} frames, 128x128, 6 seeds: peak resident memory {peaks[frames][-1] / 1024:.0f} MB")
+        if len(lengths) == 2:
+            ratios.append(peaks[lengths[1]][-1] / peaks[lengths[0]][-1])
+            print(f"{lengths[1]:,} frames / {lengths[0]:,} frames: {ratios[-1]:.2f} x (goal <= 1.2)")
+    if repeats > 1:
+        medians = ", ".join(f"{frames:,} frames {statistics.median(peaks[frames]) / 1024:.0f} MB" for frames in lengths)
+        ratio = f"; ratio {statistics.median(ratios):.2f} x (of {min(ratios):.2f} to {max(ratios):.2f})" if ratios else ""
+        print(f"median of {repeats}: {medians}{ratio}")
 
 
 if __name__ == "__main__":
