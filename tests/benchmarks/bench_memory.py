@@ -66,13 +66,15 @@ def main() -> None:
     parser.add_argument("--walkers", type=int, default=10_000)
     parser.add_argument("--frames", type=int, default=100)
     args = parser.parse_args()
+    # Before the walkers are made: a child's peak counts the pages it shares with this process
+    # until it starts its own program, and only these small peaks are below this one's.
+    bare, _ = peak([sys.executable, "-c", "import numpy, scipy, pandas"])
+    our_imports, _ = peak([sys.executable, "-c", "import seedtrack.cli, seedtrack.commands.track"])
+    their_imports, _ = peak([sys.executable, "-c", "import pandas, trackpy"])
     with tempfile.TemporaryDirectory() as folder:
         points = Path(folder) / "points.csv"
         rows = write_points(points, args.walkers, args.frames)
         print(f"{args.walkers} walkers x {args.frames} frames: {rows} points")
-        bare, _ = peak([sys.executable, "-c", "import numpy, scipy, pandas"])
-        our_imports, _ = peak([sys.executable, "-c", "import seedtrack.cli, seedtrack.commands.track"])
-        their_imports, _ = peak([sys.executable, "-c", "import pandas, trackpy"])
         ours, ours_cpu = peak([sys.executable, "-m", "seedtrack", "track", str(points), "--out", str(Path(folder) / "ours.csv")])
         theirs, theirs_cpu = peak([sys.executable, "-c", _TRACKPY, str(points), str(5 * _SIGMA), str(Path(folder) / "trackpy.csv")])
     print(f"{'':24}{'peak RSS MB':>12}{'CPU s':>8}")
