@@ -283,3 +283,22 @@ def test_goa_takes_its_first_links_from_a_tracks_file(tmp_path, capsys):
     capsys.readouterr()
     code = main(["track", str(tmp_path / "points.csv"), "--out", str(out), "--algorithm", "goa", "--first-links", str(tmp_path / "bad.csv")])
     assert code == 2 and "bad.csv: line 2: no point of frame 0" in capsys.readouterr().err
+
+
+def test_table_written_in_blocks_is_the_table_written_whole(tmp_path, monkeypatch):
+    import pandas as pd
+
+    from seedtrack.data import csvio
+
+    columns = {
+        "track_id": np.arange(10) % 3,
+        "x": np.linspace(-1.0, 2.0, 10),
+        "y": np.where(np.arange(10) % 4 == 0, np.nan, 0.5),
+        "interpolated": np.arange(10) % 2 == 0,
+        "note": np.array([f"n{k}" for k in range(10)], dtype=object),
+    }
+    whole = pd.DataFrame({name: csvio._for_writing(values) for name, values in columns.items()})
+    expected = whole.to_csv(index=False, float_format=csvio._FLOAT_FORMAT, na_rep="", lineterminator="\n")
+    monkeypatch.setattr(csvio, "_WRITE_ROWS", 3)
+    write_table(tmp_path / "t.csv", columns)
+    assert (tmp_path / "t.csv").read_text(encoding="utf-8") == expected

@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .goa import GOAConfig
-from .persistence import MotionStatistics, PersistentModel, fit_statistics
+from .persistence import MotionStatistics, PersistentModel, fit_chains, measured_chains
 from .repair import resolve_crossings
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks
@@ -89,11 +89,14 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     """
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
     first, first_fit = first_pass(frames, config, track)
-    statistics = fit_statistics(first)
-    if statistics is None:
+    chains = measured_chains(first)
+    if chains is None:
         return first, first_fit
-    # The first pass's tracks are not needed any more: freed, they do not add to the final pass's peak.
+    # The first pass's tracks are not needed any more: freed, they add neither to the fit's peak
+    # nor to the final pass's.
     del first
+    statistics = fit_chains(chains)
+    del chains
     fitted = measured_config(config, statistics)
     tracks = _final_pass(frames, fitted, statistics, track)
     for _ in range(REFITS):

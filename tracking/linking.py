@@ -10,7 +10,6 @@ IM2 follows chance alignments from one neighbour to the next.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
@@ -125,15 +124,18 @@ def link_goa(
 
 def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
     """``tracks`` with each measured position the measurement itself: moving into the drift's
-    frame and back changes the last bits, and a measured point must keep its position."""
-    held = tracks.point_measurement >= 0
-    offset = np.concatenate(([0], np.cumsum([f.shape[0] for f in frames])))
-    # One index array at a time: on a million points each copy is 8 to 16 MB of the peak.
-    index = offset[tracks.point_column[held]]
-    index += tracks.point_measurement[held]
-    xy = tracks.point_xy.copy()
-    xy[held] = np.concatenate(frames)[index]
-    return replace(tracks, point_xy=xy)
+    frame and back changes the last bits, and a measured point must keep its position.
+
+    The positions are set in place (the tracks are the pass's own), frame by frame: on a million
+    points a copy of them and of the frames joined were 31 MB of the peak of seedtrack track.
+    """
+    held = np.flatnonzero(tracks.point_measurement >= 0)
+    held = held[np.argsort(tracks.point_column[held], kind="stable")]
+    bounds = np.searchsorted(tracks.point_column[held], np.arange(len(frames) + 1))
+    for k, points in enumerate(frames):
+        rows = held[bounds[k] : bounds[k + 1]]
+        tracks.point_xy[rows] = points[tracks.point_measurement[rows]]
+    return tracks
 
 
 def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False) -> int:

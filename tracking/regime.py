@@ -314,7 +314,11 @@ def _random(
     steps = np.concatenate([b[link[link >= 0]] - a[link >= 0] for a, b, link in zip(frames[:-1], frames[1:], links)])
     reach = np.concatenate([r[r >= 0] for r in reaches])
     drift = np.median(steps, axis=0)
-    sigma = step_sigma(np.linalg.norm(steps - drift, axis=1), reach + np.linalg.norm(drift))
+    lengths = np.linalg.norm(steps - drift, axis=1)
+    # The steps are freed and the reach moved in place before the fit: on a million links 23 MB.
+    del steps
+    reach += np.linalg.norm(drift)
+    sigma = step_sigma(lengths, reach)
     return MotionChoice(
         "im1", max(_MIN_SPEED, _SIGMAS * sigma), persistence, triplets,
         f"{why}, step sigma {sigma:.2f} px/axis, drift {np.linalg.norm(drift):.2f} px/frame",
@@ -390,8 +394,17 @@ def step_sigma(lengths: np.ndarray, reach: np.ndarray) -> float:
 
     def negative_log_likelihood(log_sigma: float) -> float:
         variance = np.exp(2.0 * log_sigma)
-        kept = -np.expm1(-bound / (2.0 * variance))
-        return float(np.sum(np.log(variance) + squared / (2.0 * variance) + np.log(np.maximum(kept, 1e-300))))
+        # In place, in the same operations and order as -expm1(-bound / 2v) and
+        # log(v) + squared / 2v + log(max(kept, 1e-300)): two arrays rather than five.
+        kept = np.divide(bound, -(2.0 * variance))
+        np.expm1(kept, out=kept)
+        np.negative(kept, out=kept)
+        np.maximum(kept, 1e-300, out=kept)
+        np.log(kept, out=kept)
+        terms = np.divide(squared, 2.0 * variance)
+        terms += np.log(variance)
+        terms += kept
+        return float(np.sum(terms))
 
     rms = float(np.sqrt(np.mean(squared) / 2.0)) or 1e-6
     high = float(np.sqrt(bound.max()))

@@ -59,11 +59,19 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
     >>> bool(np.allclose(fixed.xy, straight))
     True
     """
-    xy, measurement = tracks.xy.copy(), tracks.measurement.copy()
-    measured = tracks.present & (measurement != NO_MEASUREMENT)
-    n_tracks, n_frames = measured.shape
+    n_tracks, n_frames = tracks.n_tracks, tracks.n_frames
     if n_tracks < 2 or n_frames < 3:
         return tracks
+    # Dense arrays of its own rather than copies of the cached views, and the tracks let go: on a
+    # million points the views and the point arrays were 65 MB held through the repair and the
+    # new track set, the peak of seedtrack track.
+    xy = np.full((n_tracks, n_frames, 2), np.nan)
+    xy[tracks.point_track, tracks.point_column] = tracks.point_xy
+    measurement = np.full((n_tracks, n_frames), NO_MEASUREMENT, dtype=np.int64)
+    measurement[tracks.point_track, tracks.point_column] = tracks.point_measurement
+    first_frame, track_ids = tracks.first_frame, tracks.track_ids
+    del tracks
+    measured = measurement != NO_MEASUREMENT
     for _ in range(_SWEEPS):
         changed = False
         for k in range(n_frames):
@@ -83,7 +91,8 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
                 changed |= _best_pairing(xy, measurement, measured, i, j, k, statistics)
         if not changed:
             break
-    return Tracks.from_dense(xy, measurement, tracks.first_frame, tracks.track_ids)
+    del measured
+    return Tracks.from_dense(xy, measurement, first_frame, track_ids)
 
 
 def _best_pairing(xy, measurement, measured, i: int, j: int, k: int, statistics: MotionStatistics) -> bool:

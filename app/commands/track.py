@@ -19,6 +19,7 @@ from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, Combin
 from seedtrack.tracking.trackers import TRACKERS
 from seedtrack.tracking.tracks import Tracks
 
+from ..allocation import return_freed_memory
 from ..errors import UsageError, option_name, output_file
 from ..points import Points, group_points, point_rows, track_frames
 from ..wording import counted
@@ -238,6 +239,7 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
 
 def run(args: argparse.Namespace) -> int:
     check_options(args)
+    return_freed_memory()
     # Now rather than after a long tracking run.
     check_target(args.out)
     output_format(args.out)

@@ -6,7 +6,8 @@ points CSV; then each tracker runs in a child process of its own, and the child'
 set size (``ru_maxrss`` from ``os.wait4``) is printed: `seedtrack track POINTS --out tracks.csv`
 with no options, and ``trackpy.link`` on the same CSV read with pandas, with a search range of
 5 sigma per axis (the speed limit seedtrack measures) and memory 3. Also printed: each child's
-CPU seconds, and the peak of a bare ``python -c "import numpy, scipy, pandas"`` for scale.
+CPU seconds, and for scale the peaks of a bare ``python -c "import numpy, scipy, pandas"`` and of
+the imports alone of each (the modules `seedtrack track` loads; pandas and trackpy).
 Goal (issue #14): seedtrack's peak at or below trackpy's.
 """
 
@@ -65,15 +66,21 @@ def main() -> None:
     parser.add_argument("--walkers", type=int, default=10_000)
     parser.add_argument("--frames", type=int, default=100)
     args = parser.parse_args()
+    # Before the walkers are made: a child's peak counts the pages it shares with this process
+    # until it starts its own program, and only these small peaks are below this one's.
+    bare, _ = peak([sys.executable, "-c", "import numpy, scipy, pandas"])
+    our_imports, _ = peak([sys.executable, "-c", "import seedtrack.cli, seedtrack.commands.track"])
+    their_imports, _ = peak([sys.executable, "-c", "import pandas, trackpy"])
     with tempfile.TemporaryDirectory() as folder:
         points = Path(folder) / "points.csv"
         rows = write_points(points, args.walkers, args.frames)
         print(f"{args.walkers} walkers x {args.frames} frames: {rows} points")
-        bare, _ = peak([sys.executable, "-c", "import numpy, scipy, pandas"])
         ours, ours_cpu = peak([sys.executable, "-m", "seedtrack", "track", str(points), "--out", str(Path(folder) / "ours.csv")])
         theirs, theirs_cpu = peak([sys.executable, "-c", _TRACKPY, str(points), str(5 * _SIGMA), str(Path(folder) / "trackpy.csv")])
     print(f"{'':24}{'peak RSS MB':>12}{'CPU s':>8}")
     print(f"{'python + numpy/scipy/pandas':24}{bare:12.0f}")
+    print(f"{'imports of track':24}{our_imports:12.0f}")
+    print(f"{'imports of trackpy':24}{their_imports:12.0f}")
     print(f"{'seedtrack track':24}{ours:12.0f}{ours_cpu:8.1f}")
     print(f"{'trackpy.link':24}{theirs:12.0f}{theirs_cpu:8.1f}")
     print(f"seedtrack / trackpy peak: {ours / theirs:.2f} (goal: at most 1)")
