@@ -16,10 +16,27 @@ import ctypes.util
 
 import numpy as np
 
-# glibc's mallopt setting for the size from which a block is mapped on its own (returned to the
-# system when freed); setting it also stops glibc from raising it.
-_M_MMAP_THRESHOLD = -3
+# glibc's mallopt settings: the free memory its heap keeps rather than gives back, and the size
+# from which a block is mapped on its own (returned to the system when freed); setting the
+# latter also stops glibc from raising it.
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 _MAPPED_FROM = 256 * 1024
+
+
+def set_malloc_options(**settings: int) -> None:
+    """Set glibc's ``mallopt`` options for this process, by name of their constant in this module
+    (no-op where the C library is not glibc).
+
+    Example
+    -------
+    >>> set_malloc_options(M_MMAP_THRESHOLD=32 * 1024 * 1024)
+    """
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        for name, value in settings.items():
+            libc.mallopt(globals()[name], value)
+    except (OSError, AttributeError):
+        pass  # not glibc
 
 
 def return_freed_memory() -> None:
@@ -34,8 +51,4 @@ def return_freed_memory() -> None:
     set_huge_pages = getattr(np._core.multiarray, "_set_madvise_hugepage", None)
     if set_huge_pages is not None:
         set_huge_pages(False)
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        libc.mallopt(_M_MMAP_THRESHOLD, _MAPPED_FROM)
-    except (OSError, AttributeError):
-        pass  # not glibc
+    set_malloc_options(M_MMAP_THRESHOLD=_MAPPED_FROM)

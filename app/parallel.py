@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import collections
 import contextlib
-import ctypes
-import ctypes.util
 import multiprocessing
 import os
 import queue
@@ -23,6 +21,7 @@ from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
+from seedtrack.allocation import set_malloc_options
 from seedtrack.data.video import write_video
 
 Item = TypeVar("Item")
@@ -34,11 +33,10 @@ _QUEUED_PER_WORKER = 2
 # Workers are started by a fork server: a clean process (no decoder or OpenCV threads copied
 # half-way through their work, as fork would) that has imported these once, so that each
 # worker starts in milliseconds instead of importing numpy, OpenCV and PyAV again.
-# glibc's mallopt settings: the size from which each allocation is mapped from the system (and
-# unmapped when freed), and the free memory the heap keeps rather than gives back; both fixed at
-# this many bytes. Left to glibc, a worker mapped and unmapped its frame-sized temporaries on
-# every frame, and detection there took twice the CPU time it takes in the main process.
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+# Where glibc maps allocations from the system (and unmaps them when freed), and the free memory
+# its heap keeps, both fixed at this many bytes in a worker. Left to glibc, a worker mapped and
+# unmapped its frame-sized temporaries on every frame, and detection there took twice the CPU
+# time it takes in the main process.
 _HEAP_REUSE_BYTES = 32 * 1024 * 1024
 _PRELOAD = ["seedtrack.parallel", "seedtrack.drawing", "seedtrack.detection.blobs", "seedtrack.detection.spots", "seedtrack.data.video"]
 
@@ -282,12 +280,7 @@ def _install(function: Callable) -> None:
 
 def _reuse_heap_memory() -> None:
     """Have glibc serve frame-sized allocations of this process from memory it keeps."""
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        libc.mallopt(_M_MMAP_THRESHOLD, _HEAP_REUSE_BYTES)
-        libc.mallopt(_M_TRIM_THRESHOLD, _HEAP_REUSE_BYTES)
-    except (OSError, AttributeError):
-        pass  # not glibc
+    set_malloc_options(M_MMAP_THRESHOLD=_HEAP_REUSE_BYTES, M_TRIM_THRESHOLD=_HEAP_REUSE_BYTES)
 
 
 def _apply(item):

@@ -100,10 +100,13 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     fitted = measured_config(config, statistics)
     tracks = _final_pass(frames, fitted, statistics, track)
     for _ in range(REFITS):
+        chains = measured_chains(tracks)
+        del tracks
         # Too few chains to measure on (rare after a first pass had enough): the same statistics
         # again, so that the passes, and the progress calls, are as announced.
-        statistics = fit_statistics(tracks) or statistics
-        del tracks
+        if chains is not None:
+            statistics = fit_chains(chains)
+        del chains
         fitted = measured_config(config, statistics)
         tracks = _final_pass(frames, fitted, statistics, track)
     drift = statistics.drift
