@@ -87,33 +87,38 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
 
 
 def _best_pairing(xy, measurement, measured, i: int, j: int, k: int, statistics: MotionStatistics) -> bool:
-    """Exchange the points of tracks i and j at frame k, or their tails from k, if the frames
-    around k make that more likely; True when something was exchanged."""
+    """Exchange the points of tracks i and j at frame k, or their tails from k or from k + 1
+    (the links into k or out of k crossed), if the frames around k make that more likely; True
+    when something was exchanged."""
     n_frames = xy.shape[1]
-    low, high = max(k - _REACH - 1, 0), min(k + _REACH + 2, n_frames)
+    low, high = max(k - _REACH - 1, 0), min(k + _REACH + 3, n_frames)
     window = slice(low, high)
     now = _window_cost(xy[[i, j], window], measured[[i, j], window], statistics)
     options = []
-    for tail in (False, True):
-        end = n_frames if tail else k + 1
+    for start, end in ((k, k + 1), (k, n_frames), (k + 1, n_frames)):
+        if start >= n_frames:
+            continue
         trial_xy = xy[[i, j], window].copy()
         trial_seen = measured[[i, j], window].copy()
-        span = slice(k - low, min(end, high) - low)
+        span = slice(start - low, min(end, high) - low)
         trial_xy[:, span] = trial_xy[::-1, span]
         trial_seen[:, span] = trial_seen[::-1, span]
-        options.append((_window_cost(trial_xy, trial_seen, statistics), end))
-    cost, end = min(options)
+        options.append((_window_cost(trial_xy, trial_seen, statistics), start, end))
+    cost, start, end = min(options)
     if cost >= now - _MARGIN:
         return False
     for array in (xy, measurement, measured):
-        array[[i, j], k:end] = array[[j, i], k:end]
+        array[[i, j], start:end] = array[[j, i], start:end]
     return True
 
 
 def _window_cost(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> float:
     """Negative log-likelihood of the velocity changes of two tracks (2, w, 2) over a window,
     on triplets of consecutive measured points; a triplet lacking counts as a change at the gate,
-    so that an exchange cannot win by leaving triplets out."""
+    so that an exchange cannot win by leaving triplets out. A step with no step before it (a
+    track's first, or the window's) is scored as a head with no velocity is, against the drift
+    with the spread of the velocities: otherwise a random walk's first step, which no triplet
+    judges, could be exchanged for free."""
     drift = np.asarray(statistics.drift)
     step = np.diff(xy, axis=1) - drift
     linked = seen[:, 1:] & seen[:, :-1]
@@ -122,7 +127,13 @@ def _window_cost(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics)
     variance = statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", before, before)
     change = after - statistics.persistence * _turned(before, statistics.turn)
     lacking = both.size - int(both.sum())
-    return float(np.sum(np.einsum("ij,ij->i", change, change) / (2.0 * variance) + np.log(variance))) + lacking * GATE**2 / 2.0
+    opening = linked.copy()
+    opening[:, 1:] &= ~linked[:, :-1]
+    first = step[opening]
+    spread2 = statistics.spread**2 + statistics.noise**2
+    cost = np.sum(np.einsum("ij,ij->i", change, change) / (2.0 * variance) + np.log(variance))
+    cost += np.einsum("ij,ij->", first, first) / (2.0 * spread2) + first.shape[0] * np.log(spread2)
+    return float(cost) + lacking * GATE**2 / 2.0
 
 
 __all__ = ["resolve_crossings"]
