@@ -8,7 +8,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.walkers import WalkerSpec, generate_walkers
-from seedtrack.tracking.adaptive import track_measured_motion
+from seedtrack.tracking.adaptive import track_measured_motion, without_faster_links
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
 from seedtrack.tracking.metrics import score_tracks
@@ -132,6 +132,20 @@ def test_a_given_speed_limit_only_removes_links_on_a_dish():
     limited = score_tracks(track_measured_motion(frames, GOAConfig(d_max=1.1 * DishSpec.rim_speed), _open)[0], scene.truth, 0.5)
     assert free.correct_tracks == limited.correct_tracks == 120
 
+
+
+def test_a_given_speed_limit_removes_the_links_that_break_it_and_changes_nothing_else():
+    # The tracks made with no limit, split where a link is faster than the limit: GOA is greedy in
+    # time, and tracking again under the limit changed tracks that kept to it.
+    frames, _ = generate_held_out(HeldOutSpec(kind="smooth", points=50, speed=6.0, speed_step=0.3, turn_step=30.0, random_seed=0))
+    free = track_measured_motion(frames, GOAConfig(), _open)[0]
+    speeds = np.hypot(*np.diff(free.xy, axis=1)[(free.measurement[:, 1:] >= 0) & (free.measurement[:, :-1] >= 0)].T)
+    for limit in (0.95 * float(speeds.max()), 100.0):
+        limited = track_measured_motion(frames, GOAConfig(d_max=limit), _open)[0]
+        expected = without_faster_links(free, limit)
+        assert limited.n_tracks == expected.n_tracks and np.array_equal(limited.point_xy, expected.point_xy)
+        # Below the fastest links, those are cut; far above every link, nothing is.
+        assert (limited.n_tracks > free.n_tracks) if limit < 100 else np.array_equal(limited.point_xy, free.point_xy)
 
 def test_the_measured_speed_limit_keeps_absurd_links_out():
     frames, truth = generate_psmg(

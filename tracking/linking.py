@@ -82,8 +82,7 @@ def link_goa(
     first_frame : int
         0-based frame index of ``frames[0]``.
     progress : callable, optional
-        Called with the steps done (1 after each step; the rest of a pass not needed at the end):
-        :func:`pass_steps` in all.
+        Called with 1 after each step; :func:`pass_steps` calls in all.
     first_links : ndarray of int, shape (n, 2), optional
         For "goa": the first two frames' correspondences (indices into ``frames[0]`` and
         ``frames[1]``, -1 for none), as the paper's protocol gives them, instead of choosing them.
@@ -107,14 +106,6 @@ def link_goa(
     if algorithm not in GOA_FAMILY:
         raise ValueError(f"algorithm must be one of {', '.join(GOA_FAMILY)}, got {algorithm!r}")
     frames = point_frames(frames)
-    total = pass_steps(algorithm, len(frames), motion, keep_model, config.d_max is not None)
-    done = [0]
-    if progress is not None:
-        report = progress
-
-        def progress(n: int) -> None:
-            done[0] += n
-            report(n)
 
     def track(moved: list[np.ndarray], fitted: GOAConfig) -> Tracks:
         if algorithm == "goa":
@@ -129,9 +120,6 @@ def link_goa(
     else:
         fit = fit_to_motion(frames, config, motion, keep_model)
         tracks = track_without_drift(frames, fit.drift, lambda moved: track(moved, fit.config))
-    if progress is not None and done[0] < total:
-        # A pass that was not needed (see pass_steps) counts as done.
-        progress(total - done[0])
     return (_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
 
 
@@ -148,15 +136,11 @@ def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
     return replace(tracks, point_xy=xy)
 
 
-def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False, limited: bool = False) -> int:
-    """Steps :func:`link_goa`'s progress calls count in all for ``n_frames`` frames: twice a
-    pass's when the motion is measured on a first pass, three times with a speed limit given
-    (the final pass may run with and without it; see
-    :func:`seedtrack.tracking.adaptive.track_measured_motion`)."""
+def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False) -> int:
+    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames (twice a pass's
+    when the motion is measured on a first pass)."""
     steps = max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
-    if motion != "auto" or keep_model:
-        return steps
-    return (3 if limited else 2) * steps
+    return 2 * steps if motion == "auto" and not keep_model else steps
 
 
 __all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]
