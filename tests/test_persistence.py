@@ -8,7 +8,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.walkers import WalkerSpec, generate_walkers
-from seedtrack.tracking.adaptive import track_measured_motion
+from seedtrack.tracking.adaptive import track_measured_motion, without_faster_links
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
 from seedtrack.tracking.metrics import score_tracks
@@ -83,6 +83,40 @@ def test_a_swap_at_a_crossing_is_undone_by_the_frames_after_it():
     zigzag[0, 4, 1] += 3.0
     assert np.array_equal(resolve_crossings(Tracks.from_dense(zigzag, np.zeros((2, 9), np.int64)), stats).xy, zigzag)
 
+    # A track whose velocity kinks at k may hold a neighbour's point beyond the encounter
+    # distance (3 sigma, 3 px here): 5 px apart, the point is still given back.
+    sigma_one = MotionStatistics(1.0, 1.0, 0.0, (5.0, 0.0), 1.0, 100)
+    parallel = np.stack((np.column_stack((10 + 5 * t, np.full(9, 50.0))), np.column_stack((10 + 5 * t, np.full(9, 55.0)))))
+    kinked = parallel.copy()
+    kinked[:, 4] = parallel[::-1, 4]
+    assert np.allclose(resolve_crossings(Tracks.from_dense(kinked, np.zeros((2, 9), np.int64)), sigma_one).xy, parallel)
+
+
+def test_the_first_step_of_a_random_walk_is_not_exchanged_for_free():
+    # No triplet judges a track's first step (persistence 0: it is no one's "before" either); it
+    # is scored against the drift with the spread of the steps, so a swap there is undone.
+    walk = MotionStatistics(0.0, 1.0, 0.0, (0.0, 0.0), 1.0, 100)
+    rng = np.random.default_rng(3)
+    truth = np.stack((np.cumsum(rng.normal(0, 0.3, (6, 2)), axis=0), np.cumsum(rng.normal(0, 0.3, (6, 2)), axis=0) + [2.5, 0.0]))
+    swapped = truth.copy()
+    swapped[:, 0] = truth[::-1, 0]
+    assert np.allclose(resolve_crossings(Tracks.from_dense(swapped, np.zeros((2, 6), np.int64)), walk).xy, truth)
+
+
+def test_a_link_across_a_gap_costs_more_than_one_over_a_frame_at_the_same_distance():
+    # The measured position is spread over the displacement's larger variance across a gap: a head
+    # back from a slave does not win a point at the same Mahalanobis distance as a running head.
+    for persistence in (0.0, 0.5, 1.0):
+        model = PersistentModel(MotionStatistics(persistence, 1.0, 0.0, (0.0, 0.0), 1.0, 100), gate=3.0)
+        previous = np.array([[2.0, 0.0], [2.0, 0.0]])
+        gap = np.array([1, 2])
+        growth = (1 - persistence) / gap + persistence * (gap + 1) * (2 * gap + 1) / (6 * gap)
+        # The same residual in sigmas: 1 sigma along y.
+        velocity = persistence * previous + np.column_stack((np.zeros(2), np.sqrt(growth)))
+        pairs = Candidates(np.arange(2), np.arange(2), velocity * gap[:, None], gap, previous)
+        cost = model.cost(pairs, 0.1, 50.0)
+        assert cost[1] > cost[0] == pytest.approx(0.1 / 9.0)
+
 
 def test_default_tracks_noisy_smooth_motion_better_than_the_smooth_model_alone():
     frames, truth = generate_held_out(HeldOutSpec(kind="smooth", points=40, speed=10.0, random_seed=7))
@@ -98,6 +132,20 @@ def test_a_given_speed_limit_only_removes_links_on_a_dish():
     limited = score_tracks(track_measured_motion(frames, GOAConfig(d_max=1.1 * DishSpec.rim_speed), _open)[0], scene.truth, 0.5)
     assert free.correct_tracks == limited.correct_tracks == 120
 
+
+
+def test_a_given_speed_limit_removes_the_links_that_break_it_and_changes_nothing_else():
+    # The tracks made with no limit, split where a link is faster than the limit: GOA is greedy in
+    # time, and tracking again under the limit changed tracks that kept to it.
+    frames, _ = generate_held_out(HeldOutSpec(kind="smooth", points=50, speed=6.0, speed_step=0.3, turn_step=30.0, random_seed=0))
+    free = track_measured_motion(frames, GOAConfig(), _open)[0]
+    speeds = np.hypot(*np.diff(free.xy, axis=1)[(free.measurement[:, 1:] >= 0) & (free.measurement[:, :-1] >= 0)].T)
+    for limit in (0.95 * float(speeds.max()), 100.0):
+        limited = track_measured_motion(frames, GOAConfig(d_max=limit), _open)[0]
+        expected = without_faster_links(free, limit)
+        assert limited.n_tracks == expected.n_tracks and np.array_equal(limited.point_xy, expected.point_xy)
+        # Below the fastest links, those are cut; far above every link, nothing is.
+        assert (limited.n_tracks > free.n_tracks) if limit < 100 else np.array_equal(limited.point_xy, free.point_xy)
 
 def test_the_measured_speed_limit_keeps_absurd_links_out():
     frames, truth = generate_psmg(

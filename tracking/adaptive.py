@@ -26,10 +26,11 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .goa import GOAConfig
+from .motion import SpeedLimits
 from .persistence import MotionStatistics, PersistentModel, fit_chains, measured_chains
 from .repair import resolve_crossings
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
-from .tracks import Tracks
+from .tracks import NO_MEASUREMENT, Tracks
 
 # The measured speed limit is this many times the fastest speed that fits the motion.
 SPEED_MARGIN = 2.0
@@ -97,8 +98,12 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     del first
     statistics = fit_chains(chains)
     del chains
-    fitted = measured_config(config, statistics)
-    tracks = _final_pass(frames, fitted, statistics, track)
+    # A given speed limit only removes links: every pass runs as with none, so that what is
+    # measured and what is linked do not depend on it, and the links that break it are cut at
+    # the end. GOA is greedy in time: removing links it would not have made still changed what it
+    # made later (a dish of 400 seeds lost seeds to the true limit, tracked again under it).
+    unlimited = replace(config, d_max=None)
+    tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
     for _ in range(REFITS):
         chains = measured_chains(tracks)
         del tracks
@@ -107,10 +112,13 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
         if chains is not None:
             statistics = fit_chains(chains)
         del chains
-        fitted = measured_config(config, statistics)
-        tracks = _final_pass(frames, fitted, statistics, track)
+        tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
+    fitted = measured_config(config, statistics)
+    given = config.d_max is not None
+    if given and fitted.d_max < measured_config(unlimited, statistics).d_max:
+        tracks = without_faster_links(tracks, config.d_max)
     drift = statistics.drift
-    limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if config.d_max is not None else " (measured)")
+    limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if given else " (measured)")
     measured = f"{statistics.describe()}, drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame; {limit}"
     return tracks, MotionFit(first_fit.choice, fitted, drift, measured)
 
@@ -157,8 +165,42 @@ def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfi
     if config.d_max is None:
         return replace(config, individual=model, d_max=measured)
     # The user's limit is on speeds in the image; about the drift a speed up to limit + |drift|
-    # can still be one, and only the faster ones are certainly impossible.
-    return replace(config, individual=model, d_max=config.d_max + float(np.hypot(*statistics.drift)))
+    # can still be one, and only the faster ones are certainly impossible. It only removes
+    # links: above the measured limit it changes nothing.
+    return replace(config, individual=model, d_max=min(measured, config.d_max + float(np.hypot(*statistics.drift))))
 
 
-__all__ = ["track_measured_motion", "first_pass", "measured_config", "GATE", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS"]
+def without_faster_links(tracks: Tracks, limit: float) -> Tracks:
+    """``tracks`` split wherever consecutive measured points of a track are farther apart than
+    ``limit`` (pixels/frame, gap-normalised, in the image; speeds at the limit pass whatever the
+    rounding); the positions filled in across such a link are dropped.
+
+    Example
+    -------
+    >>> xy = np.array([[[0.0, 0.0], [3.0, 4.0], [np.nan, np.nan], [23.0, 4.0]]])
+    >>> split = without_faster_links(Tracks.from_dense(xy, np.array([[0, 0, -1, 0]])), 6.0)
+    >>> split.n_tracks, split.point_track.tolist()
+    (2, [0, 0, 1])
+    """
+    measured = np.flatnonzero(tracks.point_measurement != NO_MEASUREMENT)
+    same = tracks.point_track[measured[1:]] == tracks.point_track[measured[:-1]]
+    gap = tracks.point_column[measured[1:]] - tracks.point_column[measured[:-1]]
+    velocity = (tracks.point_xy[measured[1:]] - tracks.point_xy[measured[:-1]]) / np.maximum(gap, 1)[:, None]
+    cut = same & ~SpeedLimits(d_max=limit).admits(velocity)
+    if not cut.any():
+        return tracks
+    keep = np.ones(tracks.point_track.size, bool)
+    start = np.zeros(tracks.point_track.size, bool)
+    for a, b in zip(measured[:-1][cut], measured[1:][cut]):
+        keep[a + 1 : b] = False
+        start[b] = True
+    start[1:] |= tracks.point_track[1:] != tracks.point_track[:-1]
+    start[0] = True
+    track = np.cumsum(start)[keep] - 1
+    return Tracks(
+        tracks.n_frames, track, tracks.point_column[keep], tracks.point_xy[keep], tracks.point_measurement[keep],
+        tracks.point_interpolated[keep], tracks.first_frame,
+    )
+
+
+__all__ = ["track_measured_motion", "first_pass", "measured_config", "without_faster_links", "GATE", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS"]

@@ -71,6 +71,11 @@ class Candidates:
         )
 
 
+# A speed at a limit stays within it whatever the last bits of the positions' differences: points
+# moving at exactly the limit (a generator's largest speed) lost their links to rounding.
+_ROUNDING = 1e-9
+
+
 @dataclass(frozen=True)
 class SpeedLimits:
     """The speed gate that every GOA link passes: d_min <= gap-normalised speed <= d_max.
@@ -98,9 +103,9 @@ class SpeedLimits:
     def admits(self, velocity: np.ndarray) -> np.ndarray:
         """Boolean (P,): the velocities (P, 2), pixels/frame, whose speed is within the limits."""
         speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
-        ok = speed >= self.d_min
+        ok = speed >= self.d_min * (1 - _ROUNDING)
         if self.d_max is not None:
-            ok &= speed <= self.d_max
+            ok &= speed <= self.d_max * (1 + _ROUNDING)
         return ok
 
     def reach(self, radius: np.ndarray) -> np.ndarray:

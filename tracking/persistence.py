@@ -342,7 +342,13 @@ class PersistentModel:
         for turn in {s.turn, -s.turn}:
             residual = candidates.velocity - drift - _predicted(about, candidates.gap, span, s.persistence, turn)
             squared = np.minimum(squared, np.einsum("ij,ij->i", residual, residual))
-        return phi_max * squared / (self.gate**2 * variance)
+        # The measurement is a position: its density across a gap is spread over the g^2 growth
+        # times larger variance of the displacement, which a link over one frame does not pay
+        # (twice the log of that ratio, in units of the squared distance). Without it a head back
+        # from a slave wins a point at the same distance from two heads, and two tracks take
+        # turns at one walker by the view's edge.
+        spread = 2.0 * np.log(gap * gap * growth)
+        return phi_max * (squared / variance + spread) / self.gate**2
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can cost under phi_max, pixels/frame."""

@@ -7,11 +7,13 @@ The frames after the crossing do tell: a wrong pairing leaves both tracks with a
 looks at every pair of tracks whose points in a frame lie closer than the model's noise allows
 telling apart, and compares, over the five frames around it (Veenman, Reinders and Backer's
 extended temporal scope, reduced to pairs), the links as they are with the two points
-exchanged in that frame alone and with the tails exchanged from that frame on; the pairing
-whose velocity changes are most likely under the measured motion
-(:class:`seedtrack.tracking.persistence.MotionStatistics`) is kept. Pairs are found with a
-KD-tree per frame, so the work grows with the number of close encounters, not with the square
-of the tracks.
+exchanged in that frame alone and with the tails exchanged from that frame on or from the next;
+the pairing whose velocity changes are most likely under the measured motion
+(:class:`seedtrack.tracking.persistence.MotionStatistics`) is kept. A track whose velocity
+kinks in a frame is also paired with every track near it there, out to the final pass's gate:
+after a wrong link nearby it may hold a neighbour's point that was never close to its own.
+Pairs are found with a KD-tree per frame, so the work grows with the number of close
+encounters and kinks, not with the square of the tracks.
 """
 
 from __future__ import annotations
@@ -27,6 +29,10 @@ from .tracks import NO_MEASUREMENT, Tracks
 _REACH = 2
 # Two points are an encounter when closer than this many noise sigmas (at their speed).
 _ENCOUNTER_SIGMAS = 3.0
+# A track whose velocity changes beyond the encounter distance at k is paired with the tracks
+# whose points lie within this many of its noise sigmas: the final pass's gate (adaptive.GATE),
+# the farthest a point it took can be from its prediction.
+_KINK_REACH = 9.0
 # An exchange is made only if it makes the window this much more likely (log-likelihood units),
 # so that rounding never flips a tie.
 _MARGIN = 1e-6
@@ -72,23 +78,38 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
     first_frame, track_ids = tracks.first_frame, tracks.track_ids
     del tracks
     measured = measurement != NO_MEASUREMENT
+    drift = np.asarray(statistics.drift)
     for _ in range(_SWEEPS):
         changed = False
         for k in range(n_frames):
-            # Three measured frames about k (at the clip's ends, the three next to it) give each
-            # track a velocity change to compare.
-            low = min(max(k - 1, 0), n_frames - 3)
-            rows = np.flatnonzero(measured[:, low : low + 3].all(axis=1))
+            rows = np.flatnonzero(measured[:, k])
             if rows.size < 2:
                 continue
-            speed = np.hypot(*(xy[rows, low + 1] - xy[rows, low] - statistics.drift).T)
-            sigma = np.sqrt(statistics.noise**2 + (statistics.relative * speed) ** 2)
-            pairs = cKDTree(xy[rows, k]).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")
-            for a, b in pairs:
+            # Each track's speed at k, from its step into k (or out of it), sets its noise.
+            into = measured[rows, k - 1] if k else np.zeros(rows.size, bool)
+            out = measured[rows, k + 1] if k + 1 < n_frames else np.zeros(rows.size, bool)
+            step = np.zeros((rows.size, 2))
+            if out.any():
+                step[out] = xy[rows[out], k + 1] - xy[rows[out], k] - drift
+            if into.any():
+                step[into] = xy[rows[into], k] - xy[rows[into], k - 1] - drift
+            sigma = np.sqrt(statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", step, step))
+            tree = cKDTree(xy[rows, k])
+            pairs = [tree.query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
+            # A track that changes its velocity at k beyond the encounter distance may hold a
+            # neighbour's point there (taken after a wrong link nearby): its pairs reach to the gate.
+            both = np.flatnonzero(into & out)
+            change = np.zeros((0, 2)) if not both.size else xy[rows[both], k + 1] - xy[rows[both], k] - drift - statistics.persistence * _turned(step[both], statistics.turn)
+            kinked = both[np.hypot(*change.T) > _ENCOUNTER_SIGMAS * sigma[both]]
+            for a in kinked:
+                near = np.asarray(tree.query_ball_point(xy[rows[a], k], _KINK_REACH * sigma[a]), dtype=np.int64)
+                pairs.append(np.column_stack((np.full(near.size, a), near))[near != a])
+            found = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0) if any(p.size for p in pairs) else ()
+            for a, b in found:
                 i, j = rows[a], rows[b]
-                if np.hypot(*(xy[i, k] - xy[j, k])) > _ENCOUNTER_SIGMAS * max(sigma[a], sigma[b]):
-                    continue
-                changed |= _best_pairing(xy, measurement, measured, i, j, k, statistics)
+                close = np.hypot(*(xy[i, k] - xy[j, k])) <= _ENCOUNTER_SIGMAS * max(sigma[a], sigma[b])
+                if close or a in kinked or b in kinked:
+                    changed |= _best_pairing(xy, measurement, measured, i, j, k, statistics)
         if not changed:
             break
     del measured
@@ -96,33 +117,38 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
 
 
 def _best_pairing(xy, measurement, measured, i: int, j: int, k: int, statistics: MotionStatistics) -> bool:
-    """Exchange the points of tracks i and j at frame k, or their tails from k, if the frames
-    around k make that more likely; True when something was exchanged."""
+    """Exchange the points of tracks i and j at frame k, or their tails from k or from k + 1
+    (the links into k or out of k crossed), if the frames around k make that more likely; True
+    when something was exchanged."""
     n_frames = xy.shape[1]
-    low, high = max(k - _REACH - 1, 0), min(k + _REACH + 2, n_frames)
+    low, high = max(k - _REACH - 1, 0), min(k + _REACH + 3, n_frames)
     window = slice(low, high)
     now = _window_cost(xy[[i, j], window], measured[[i, j], window], statistics)
     options = []
-    for tail in (False, True):
-        end = n_frames if tail else k + 1
+    for start, end in ((k, k + 1), (k, n_frames), (k + 1, n_frames)):
+        if start >= n_frames:
+            continue
         trial_xy = xy[[i, j], window].copy()
         trial_seen = measured[[i, j], window].copy()
-        span = slice(k - low, min(end, high) - low)
+        span = slice(start - low, min(end, high) - low)
         trial_xy[:, span] = trial_xy[::-1, span]
         trial_seen[:, span] = trial_seen[::-1, span]
-        options.append((_window_cost(trial_xy, trial_seen, statistics), end))
-    cost, end = min(options)
+        options.append((_window_cost(trial_xy, trial_seen, statistics), start, end))
+    cost, start, end = min(options)
     if cost >= now - _MARGIN:
         return False
     for array in (xy, measurement, measured):
-        array[[i, j], k:end] = array[[j, i], k:end]
+        array[[i, j], start:end] = array[[j, i], start:end]
     return True
 
 
 def _window_cost(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> float:
     """Negative log-likelihood of the velocity changes of two tracks (2, w, 2) over a window,
     on triplets of consecutive measured points; a triplet lacking counts as a change at the gate,
-    so that an exchange cannot win by leaving triplets out."""
+    so that an exchange cannot win by leaving triplets out. A step with no step before it (a
+    track's first, or the window's) is scored as a head with no velocity is, against the drift
+    with the spread of the velocities: otherwise a random walk's first step, which no triplet
+    judges, could be exchanged for free."""
     drift = np.asarray(statistics.drift)
     step = np.diff(xy, axis=1) - drift
     linked = seen[:, 1:] & seen[:, :-1]
@@ -131,7 +157,13 @@ def _window_cost(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics)
     variance = statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", before, before)
     change = after - statistics.persistence * _turned(before, statistics.turn)
     lacking = both.size - int(both.sum())
-    return float(np.sum(np.einsum("ij,ij->i", change, change) / (2.0 * variance) + np.log(variance))) + lacking * GATE**2 / 2.0
+    opening = linked.copy()
+    opening[:, 1:] &= ~linked[:, :-1]
+    first = step[opening]
+    spread2 = statistics.spread**2 + statistics.noise**2
+    cost = np.sum(np.einsum("ij,ij->i", change, change) / (2.0 * variance) + np.log(variance))
+    cost += np.einsum("ij,ij->", first, first) / (2.0 * spread2) + first.shape[0] * np.log(spread2)
+    return float(cost) + lacking * GATE**2 / 2.0
 
 
 __all__ = ["resolve_crossings"]
