@@ -215,8 +215,9 @@ def render_overlay(
         rows = detections.to_rows()
         false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
         draw = functools.partial(_annotate_pair, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
-        with progress_bar(source.frame_count, "rendering") as bar:
-            encode_video(out, ordered_map(draw, source, workers - 1), fps, workers, progress=bar)
+        # The next frames decode beside drawing, as in detection.
+        with progress_bar(source.frame_count, "rendering") as bar, read_ahead(source) as read:
+            encode_video(out, ordered_map(draw, read, workers - 1), fps, workers, progress=bar)
 
 
 def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
