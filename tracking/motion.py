@@ -451,7 +451,7 @@ class ConditionedDeviation(CombinedModel, key="cm2"):
 
 
 @dataclass(frozen=True)
-class MarginDeviation(CombinedModel, key="cm2-margin"):
+class MarginDeviation(ConditionedDeviation, key="cm2-margin"):
     """CM2 against the best alternative and the best competitor: a pair is cheaper by how far it
     beats them, ``c - w1 * max(0, a - c) - w2 * max(0, b - c)``.
 
@@ -475,13 +475,6 @@ class MarginDeviation(CombinedModel, key="cm2-margin"):
     """
 
     name: str = "cm2-margin"
-    w1: float = 0.0
-    w2: float = 0.0
-
-    def __post_init__(self) -> None:
-        self._check_name()
-        if self.w1 < 0 or self.w2 < 0:
-            raise ValueError("CM2 weights must be non-negative")
 
     def weights(self, cost: np.ndarray, head: np.ndarray, measurement: np.ndarray, phi_max: float) -> np.ndarray:
         head_margin = np.maximum(_best_other(cost, head, phi_max) - cost, 0.0)
