@@ -104,66 +104,83 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
             for a in kinked:
                 near = np.asarray(tree.query_ball_point(xy[rows[a], k], _KINK_REACH * sigma[a]), dtype=np.int64)
                 pairs.append(np.column_stack((np.full(near.size, a), near))[near != a])
-            found = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0) if any(p.size for p in pairs) else ()
-            for a, b in found:
-                i, j = rows[a], rows[b]
-                close = np.hypot(*(xy[i, k] - xy[j, k])) <= _ENCOUNTER_SIGMAS * max(sigma[a], sigma[b])
-                if close or a in kinked or b in kinked:
-                    changed |= _best_pairing(xy, measurement, measured, i, j, k, statistics)
+            if not any(p.size for p in pairs):
+                continue
+            a, b = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0).T
+            i, j = rows[a], rows[b]
+            kink = np.isin(a, kinked) | np.isin(b, kinked)
+            close = np.hypot(*(xy[i, k] - xy[j, k]).T) <= _ENCOUNTER_SIGMAS * np.maximum(sigma[a], sigma[b])
+            # Every pair weighed at once on the tracks as they are; one after another, as an
+            # exchange changes its two tracks, pairs that hold one of them are weighed again.
+            weighed = np.flatnonzero(close | kink)
+            if not weighed.size:
+                continue
+            now, best, spans = _pairings(xy, measured, i[weighed], j[weighed], k, statistics)
+            exchanged: set[int] = set()
+            for p, q in enumerate(weighed):
+                pair = (int(i[q]), int(j[q]))
+                if exchanged.intersection(pair):
+                    if not (kink[q] or np.hypot(*(xy[pair[0], k] - xy[pair[1], k])) <= _ENCOUNTER_SIGMAS * max(sigma[a[q]], sigma[b[q]])):
+                        continue
+                    [pair_now], [pair_best], [span] = _pairings(xy, measured, i[q : q + 1], j[q : q + 1], k, statistics)
+                else:
+                    pair_now, pair_best, span = now[p], best[p], spans[p]
+                if pair_best < pair_now - _MARGIN:
+                    for array in (xy, measurement, measured):
+                        array[pair, span[0] : span[1]] = array[pair[::-1], span[0] : span[1]]
+                    exchanged.update(pair)
+                    changed = True
         if not changed:
             break
     del measured
     return Tracks.from_dense(xy, measurement, first_frame, track_ids)
 
 
-def _best_pairing(xy, measurement, measured, i: int, j: int, k: int, statistics: MotionStatistics) -> bool:
-    """Exchange the points of tracks i and j at frame k, or their tails from k or from k + 1
-    (the links into k or out of k crossed), if the frames around k make that more likely; True
-    when something was exchanged."""
+def _pairings(xy, measured, i: np.ndarray, j: np.ndarray, k: int, statistics: MotionStatistics):
+    """For the pairs of tracks (i[p], j[p]) about frame k: the cost of the frames around k as
+    they are, and of the cheapest exchange of their points at k alone or of their tails from k or
+    from k + 1 (the links into k or out of k crossed), with its frames (start, end)."""
     n_frames = xy.shape[1]
     low, high = max(k - _REACH - 1, 0), min(k + _REACH + 3, n_frames)
-    window = slice(low, high)
-    now = _window_cost(xy[[i, j], window], measured[[i, j], window], statistics)
-    options = []
-    for start, end in ((k, k + 1), (k, n_frames), (k + 1, n_frames)):
-        if start >= n_frames:
-            continue
-        trial_xy = xy[[i, j], window].copy()
-        trial_seen = measured[[i, j], window].copy()
-        span = slice(start - low, min(end, high) - low)
-        trial_xy[:, span] = trial_xy[::-1, span]
-        trial_seen[:, span] = trial_seen[::-1, span]
-        options.append((_window_cost(trial_xy, trial_seen, statistics), start, end))
-    cost, start, end = min(options)
-    if cost >= now - _MARGIN:
-        return False
-    for array in (xy, measurement, measured):
-        array[[i, j], start:end] = array[[j, i], start:end]
-    return True
+    pair_xy = np.stack((xy[i, low:high], xy[j, low:high]), axis=1)
+    pair_seen = np.stack((measured[i, low:high], measured[j, low:high]), axis=1)
+    now = _window_costs(pair_xy, pair_seen, statistics)
+    # In this order, so that of equally cheap exchanges the one of the fewest frames is taken (k
+    # is a frame, so the first is always there).
+    spans = [(start, end) for start, end in ((k, k + 1), (k, n_frames), (k + 1, n_frames)) if start < n_frames]
+    costs = []
+    for start, end in spans:
+        frames = slice(start - low, min(end, high) - low)
+        trial_xy, trial_seen = pair_xy.copy(), pair_seen.copy()
+        trial_xy[:, :, frames] = pair_xy[:, ::-1, frames]
+        trial_seen[:, :, frames] = pair_seen[:, ::-1, frames]
+        costs.append(_window_costs(trial_xy, trial_seen, statistics))
+    costs = np.stack(costs, axis=1)
+    choice = np.argmin(costs, axis=1)
+    return now, costs[np.arange(len(i)), choice], [spans[c] for c in choice]
 
 
-def _window_cost(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> float:
-    """Negative log-likelihood of the velocity changes of two tracks (2, w, 2) over a window,
-    on triplets of consecutive measured points; a triplet lacking counts as a change at the gate,
-    so that an exchange cannot win by leaving triplets out. A step with no step before it (a
-    track's first, or the window's) is scored as a head with no velocity is, against the drift
-    with the spread of the velocities: otherwise a random walk's first step, which no triplet
-    judges, could be exchanged for free."""
-    drift = np.asarray(statistics.drift)
-    step = np.diff(xy, axis=1) - drift
-    linked = seen[:, 1:] & seen[:, :-1]
-    both = linked[:, 1:] & linked[:, :-1]
-    before, after = step[:, :-1][both], step[:, 1:][both]
-    variance = statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", before, before)
-    change = after - statistics.persistence * _turned(before, statistics.turn)
-    lacking = both.size - int(both.sum())
+def _window_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> np.ndarray:
+    """Negative log-likelihood of the velocity changes of pairs of tracks (P, 2, w, 2) over a
+    window, on triplets of consecutive measured points; a triplet lacking counts as a change at
+    the gate, so that an exchange cannot win by leaving triplets out. A step with no step before
+    it (a track's first, or the window's) is scored as a head with no velocity is, against the
+    drift with the spread of the velocities: otherwise a random walk's first step, which no
+    triplet judges, could be exchanged for free."""
+    step = np.diff(xy, axis=2) - np.asarray(statistics.drift)
+    linked = seen[..., 1:] & seen[..., :-1]
+    both = linked[..., 1:] & linked[..., :-1]
+    before, after = step[:, :, :-1], step[:, :, 1:]
+    variance = statistics.noise**2 + statistics.relative**2 * np.einsum("...i,...i->...", before, before)
+    change = after - statistics.persistence * _turned(before.reshape(-1, 2), statistics.turn).reshape(before.shape)
+    with np.errstate(invalid="ignore"):  # unmeasured positions are NaN, and left out by the masks
+        triplets = np.where(both, np.einsum("...i,...i->...", change, change) / (2.0 * variance) + np.log(variance), 0.0)
+    lacking = both[0].size - both.sum(axis=(1, 2))
     opening = linked.copy()
-    opening[:, 1:] &= ~linked[:, :-1]
-    first = step[opening]
+    opening[..., 1:] &= ~linked[..., :-1]
     spread2 = statistics.spread**2 + statistics.noise**2
-    cost = np.sum(np.einsum("ij,ij->i", change, change) / (2.0 * variance) + np.log(variance))
-    cost += np.einsum("ij,ij->", first, first) / (2.0 * spread2) + first.shape[0] * np.log(spread2)
-    return float(cost) + lacking * GATE**2 / 2.0
+    first = np.where(opening, np.einsum("...i,...i->...", step, step), 0.0).sum(axis=(1, 2))
+    return triplets.sum(axis=(1, 2)) + first / (2.0 * spread2) + opening.sum(axis=(1, 2)) * np.log(spread2) + lacking * GATE**2 / 2.0
 
 
 __all__ = ["resolve_crossings"]
