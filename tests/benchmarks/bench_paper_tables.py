@@ -21,7 +21,7 @@ from pathlib import Path
 import pandas as pd
 
 from seedtrack.cli import main
-from seedtrack.experiments import EXPERIMENTS, PROTOCOLS, SWEEP_PEERS
+from seedtrack.experiments import PROTOCOLS, SWEEP_PEERS
 
 ROOT = Path(__file__).resolve().parents[2]
 BEGIN = "<!-- paper-tables: written by tests/benchmarks/bench_paper_tables.py, do not edit by hand -->"
