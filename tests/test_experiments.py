@@ -105,14 +105,12 @@ def test_every_experiment_runs_at_a_tiny_size(name, tmp_path, capsys):
             assert rows.sum() == len(cases) and not summary["failures"][rows].any(), tracker
 
 
-@pytest.mark.parametrize("name", sorted(RUNNERS))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=needs_peers) if n.startswith(("trackpy", "laptrack", "stonesoup")) else n for n in sorted(RUNNERS)])
 def test_under_the_given_protocol_every_tracker_keeps_the_given_first_links(name):
     # Two points cross between frames 0 and 1, so nearest-neighbour first links are wrong; the
     # given ones must survive.
     frames = [np.array([[20.0, 20.0], [20.0, 28.0]])] + [np.array([[26.0 + 6 * k, 27.0], [26.0 + 6 * k, 21.0]]) for k in range(5)]
     given = np.array([[0, 0], [1, 1]])
-    if name.startswith(("trackpy", "laptrack", "stonesoup")) and not peers_available():
-        pytest.skip("the peers extra is not installed")
     tracks = RUNNERS[name](frames, 14.0, given)
     owner = {}
     for track, column, measurement, xy in zip(tracks.point_track, tracks.point_column, tracks.point_measurement, tracks.point_xy):
