@@ -73,6 +73,36 @@ def test_a_false_detection_opens_no_track():
     assert not (tracks.measurement[:, 5] == 2).any()
 
 
+# Four points at the corners of a 100 x 100 view, drifting slowly: they mark the view's extent.
+CORNERS = [np.array([[0.0, 0.0], [100.0, 0.0], [0.0, 100.0], [100.0, 100.0]]) + [0.2 * k, 0.1 * k] for k in range(12)]
+
+
+def _with(frames, extra):
+    """``frames`` with the points of ``extra`` ({frame: (x, y)}) added at the end of their frames."""
+    return [np.vstack((f, [extra[k]])) if k in extra else f for k, f in enumerate(frames)]
+
+
+def test_a_point_seen_twice_at_the_view_edge_is_a_two_point_track():
+    frames = _with(CORNERS, {5: (1.0, 50.0), 6: (2.0, 50.5)})
+    tracks = goa_updown_open(frames, GOAConfig(d_max=5.0))
+    assert tracks.n_tracks == 5
+    assert rows_by_track(tracks)[-1] == ([5, 6], [0, 0])
+
+
+def test_a_pair_that_a_third_frame_should_have_shown_opens_no_track():
+    # The same pair inside the view: its point would have been seen in frame 4 or 7.
+    frames = _with(CORNERS, {5: (50.0, 50.0), 6: (51.0, 50.5)})
+    tracks = goa_updown_open(frames, GOAConfig(d_max=5.0))
+    assert tracks.n_tracks == 4
+
+
+def test_a_pair_in_the_clips_last_frames_needs_only_its_first_point_at_the_edge():
+    at_end = goa_updown_open(_with(CORNERS, {10: (1.0, 50.0), 11: (5.0, 50.5)}), GOAConfig(d_max=5.0))
+    assert rows_by_track(at_end)[-1] == ([10, 11], [0, 0])
+    inside = goa_updown_open(_with(CORNERS, {10: (50.0, 50.0), 11: (51.0, 50.5)}), GOAConfig(d_max=5.0))
+    assert inside.n_tracks == 4
+
+
 def test_gap_closing_joins_an_end_to_the_start_that_continues_its_motion():
     # RIGHT's two parts and a decoy start at the same frame, off RIGHT's line.
     decoy = RIGHT + [0.0, 12.0]

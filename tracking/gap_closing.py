@@ -1,8 +1,11 @@
-"""Gap filling after the passes: extend track ends, and join a track that ends to a track that
-starts a few frames later when they are one object.
+"""Gap filling after the passes: extend track ends, pair the points seen in two frames only at
+the view's edge, and join a track that ends to a track that starts a few frames later when they
+are one object.
 
 A track opens only from a run of measured frames, so the first point of a track that starts
-badly placed for its first links stays free; :func:`extend_track_ends` gives it back.
+badly placed for its first links stays free; :func:`extend_track_ends` gives it back. A point
+in view for two frames only has no third to open a track with; :func:`pair_at_view_edge` makes
+it a track where no third frame could have shown it.
 :func:`join_track_ends` is IPAN's post-processing idea, in GOA's terms: the end of track A (its last measured point and
 velocity) is joined to the start of track B (first point and velocity) across ``gap`` missed
 frames when both moves through the bridge, from A's velocity to the bridging velocity and from
@@ -25,8 +28,9 @@ from .motion import Candidates
 
 @dataclass(frozen=True)
 class FillGaps:
-    """Gap filling: both ends of every track extended, then (with ``join``) track ends joined
-    to track starts at most ``max_gap`` frames later."""
+    """Gap filling: both ends of every track extended, pairs of free points at the view's edge
+    made tracks, then (with ``join``) track ends joined to track starts at most ``max_gap``
+    frames later."""
 
     max_gap: int = 10
     join: bool = True
@@ -36,6 +40,7 @@ class FillGaps:
         with their ends extended and their gaps joined."""
         assignment = extend_track_ends(frames, assignment, config)
         assignment = extend_track_ends(frames[::-1], assignment[:, ::-1], config)[:, ::-1]
+        assignment = pair_at_view_edge(frames, assignment, config)
         if self.join:
             assignment = join_track_ends(frames, assignment, config, self.max_gap)
         return assignment
@@ -80,6 +85,74 @@ def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
         held[heads[got], k] = True
         after_last[heads[got]] = k + 1
     return assignment
+
+
+def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """Two-point tracks for free measurements of consecutive frames that no third frame could
+    confirm: where a point is seen in two frames only because it entered or left the view, or
+    the clip begins or ends.
+
+    A track opens on three measured frames in a row, so that a false detection does not open
+    one; but a point in view for two frames has no third to show. Each free measurement of
+    frame k is linked to the free measurements of frame k + 1 by one GOA step (heads with no
+    velocity yet, as first links are gated), and a link makes a track only when the region
+    where the model would look for the point in frame k - 1, and the one in frame k + 2, each
+    reaches outside that frame's measured view (the bounding box of its measurements) or lies
+    outside the clip. Inside the view a missing third point is evidence against the pair.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, each (M_k, 2)
+        Measurement positions per frame, pixels.
+    assignment : ndarray of int, shape (n_tracks, n_frames)
+        Measurement index per track and frame, -1 where none.
+    config : GOAConfig
+
+    Returns
+    -------
+    ndarray of int, shape (n_tracks + n_pairs, n_frames)
+        ``assignment`` with one row per pair added, in frame order.
+
+    Examples
+    --------
+    A point at the left edge for frames 1 and 2 of 4, beside one tracked all along:
+
+    >>> frames = [np.array([[50.0, 50.0]]), np.array([[51.0, 50.0], [1.0, 20.0]]),
+    ...           np.array([[52.0, 50.0], [0.0, 21.0]]), np.array([[53.0, 50.0]])]
+    >>> pair_at_view_edge(frames, np.zeros((1, 4), np.int64), GOAConfig(d_max=3.0)).tolist()
+    [[0, 0, 0, 0], [-1, 1, 1, -1]]
+    """
+    n = len(frames)
+    held = assignment != UNASSIGNED
+    free = [np.ones(f.shape[0], bool) for f in frames]
+    for k in range(n):
+        free[k][assignment[held[:, k], k]] = False
+    rows = [assignment]
+    for k in range(n - 1):
+        first, second = np.flatnonzero(free[k]), np.flatnonzero(free[k + 1])
+        if first.size == 0 or second.size == 0:
+            continue
+        state = HeadState(frames[k][first], np.full(first.size, k), np.full((first.size, 2), np.nan))
+        taken = assign_step(state, k + 1, frames[k + 1][second], config)
+        linked = taken != UNASSIGNED
+        a, b = first[linked], second[taken[linked]]
+        speed = np.hypot(*(frames[k + 1][b] - frames[k][a]).T)
+        reach = config.speed.reach(config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max))
+        unconfirmable = _reaches_out(frames, k - 1, frames[k][a], reach) & _reaches_out(frames, k + 2, frames[k + 1][b], reach)
+        pairs = np.full((int(unconfirmable.sum()), n), UNASSIGNED, dtype=np.int64)
+        pairs[:, k], pairs[:, k + 1] = a[unconfirmable], b[unconfirmable]
+        free[k + 1][b[unconfirmable]] = False
+        rows.append(pairs)
+    return np.concatenate(rows)
+
+
+def _reaches_out(frames: Sequence[np.ndarray], k: int, points: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Boolean per point: the disc of radius ``reach`` (pixels) about it is not all inside the
+    bounding box of ``frames[k]``'s measurements, or frame k is outside the clip or empty."""
+    if not 0 <= k < len(frames) or frames[k].shape[0] == 0:
+        return np.ones(points.shape[0], bool)
+    low, high = frames[k].min(axis=0), frames[k].max(axis=0)
+    return ((points - reach[:, None] < low) | (points + reach[:, None] > high)).any(axis=1)
 
 
 def _ends(frames: Sequence[np.ndarray], assignment: np.ndarray, reverse: bool) -> tuple[np.ndarray, ...]:
@@ -177,4 +250,4 @@ def _chain(assignment: np.ndarray, successor: np.ndarray) -> np.ndarray:
     return merged
 
 
-__all__ = ["FillGaps", "extend_track_ends", "join_track_ends"]
+__all__ = ["FillGaps", "extend_track_ends", "pair_at_view_edge", "join_track_ends"]

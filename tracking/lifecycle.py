@@ -8,7 +8,9 @@ tracks. A new track opens only when its first measurements chain smoothly over t
 a row (scored like the first links of GOA-updown, then confirmed by GOA itself on the leftover
 measurements), so that a false detection does not open a track. :class:`EndTracks` ends a track
 that has taken more than ``max_gap`` slaves in a row; its trailing slaves are dropped and its
-inner gaps are interpolated.
+inner gaps are interpolated. A point seen in two frames only, where it enters or leaves the view
+or the clip, is made a two-point track after the passes
+(:func:`seedtrack.tracking.gap_closing.pair_at_view_edge`).
 
 The up pass runs forwards; the down pass runs backwards in time from the tracks the up pass
 holds at the last frame, so that every track start is re-decided with the velocities learned
