@@ -143,7 +143,8 @@ def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
         pairs[:, k], pairs[:, k + 1] = a[unconfirmable], b[unconfirmable]
         free[k + 1][b[unconfirmable]] = False
         rows.append(pairs)
-    return np.concatenate(rows)
+    # Joined only when there is something to add: on long clips the assignment is large.
+    return np.concatenate(rows) if any(r.shape[0] for r in rows[1:]) else assignment
 
 
 def _reaches_out(frames: Sequence[np.ndarray], k: int, points: np.ndarray, reach: np.ndarray) -> np.ndarray:
