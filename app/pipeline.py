@@ -123,7 +123,7 @@ def detect_clip(
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
     workers : int
-        Processes detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
+        Threads detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
         the same for any number.
 
     Raises
@@ -154,9 +154,12 @@ def detect_clip(
                     yield index, image
                     bar.update(1)
 
-            # The next frames decode beside detection, on another core if there is one.
+            # The next frames decode beside detection, on another core if there is one. Frames
+            # are detected in threads, not processes: both detectors spend most of their time in
+            # OpenCV and numpy without Python's lock, and a clip of a few hundred frames took
+            # longer to detect in two processes than in one (starting them, pickling frames).
             with read_ahead(source) as read:
-                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers))
+                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers, threads=True))
         if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
