@@ -232,8 +232,9 @@ def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
-    ``workers`` processes; the files are the same for any number.
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection uses ``workers``
+    threads, drawing and encoding ``workers`` processes (see :func:`render_overlay`); the files
+    are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
