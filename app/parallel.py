@@ -16,7 +16,7 @@ import os
 import queue
 import signal
 import threading
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
@@ -76,8 +76,9 @@ def process_context() -> multiprocessing.context.BaseContext:
     return context
 
 
-def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int) -> Iterator[Result]:
-    """``function(item)`` for each item, in the items' order, computed by ``workers`` processes.
+def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int, threads: bool = False) -> Iterator[Result]:
+    """``function(item)`` for each item, in the items' order, computed by ``workers`` processes
+    (or threads).
 
     With one worker (or where no process can be started) everything runs here, one item at a
     time, so the results are the same whatever ``workers`` is as long as ``function`` depends
@@ -91,7 +92,11 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
     items : iterable
         Consumed a few items per worker ahead of the results; each is pickled to a worker.
     workers : int
-        Processes, >= 1.
+        Processes (threads), >= 1.
+    threads : bool
+        Threads of this process instead: no process to start and nothing pickled, for work
+        that lets go of Python's lock most of the time (OpenCV's calls, numpy's operations on
+        whole frames); ``function`` need not be picklable.
 
     Yields
     ------
@@ -102,14 +107,18 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
     >>> list(ordered_map(abs, [-3, 1, -2], workers=1))
     [3, 1, 2]
     """
-    if workers <= 1 or not can_start_processes():
+    if workers <= 1 or not (threads or can_start_processes()):
         yield from map(function, items)
         return
-    with ProcessPoolExecutor(workers, mp_context=process_context(), initializer=_install, initargs=(function,)) as pool:
+    if threads:
+        pool, task = ThreadPoolExecutor(workers, thread_name_prefix="ordered-map"), function
+    else:
+        pool, task = ProcessPoolExecutor(workers, mp_context=process_context(), initializer=_install, initargs=(function,)), _apply
+    with pool:
         pending: collections.deque = collections.deque()
         try:
             for item in items:
-                pending.append(pool.submit(_apply, item))
+                pending.append(pool.submit(task, item))
                 if len(pending) > workers * (1 + _QUEUED_PER_WORKER):
                     yield pending.popleft().result()
             while pending:

@@ -123,7 +123,7 @@ def detect_clip(
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
     workers : int
-        Processes detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
+        Threads detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
         the same for any number.
 
     Raises
@@ -154,9 +154,12 @@ def detect_clip(
                     yield index, image
                     bar.update(1)
 
-            # The next frames decode beside detection, on another core if there is one.
+            # The next frames decode beside detection, on another core if there is one. Frames
+            # are detected in threads, not processes: both detectors spend most of their time in
+            # OpenCV and numpy without Python's lock, and a clip of a few hundred frames took
+            # longer to detect in two processes than in one (starting them, pickling frames).
             with read_ahead(source) as read:
-                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers))
+                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers, threads=True))
         if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
@@ -229,8 +232,9 @@ def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
-    ``workers`` processes; the files are the same for any number.
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection uses ``workers``
+    threads, drawing and encoding ``workers`` processes (see :func:`render_overlay`); the files
+    are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.

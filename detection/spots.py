@@ -161,7 +161,7 @@ def _band_and_smooth(gray: np.ndarray, diameter: int, polarity: str) -> tuple[np
         signal = np.negative(signal)
     smooth = cv2.GaussianBlur(signal, (0, 0), _NOISE_SIGMA_PX, borderType=cv2.BORDER_REFLECT)
     background = cv2.boxFilter(signal, -1, (diameter, diameter), borderType=cv2.BORDER_REFLECT)
-    return cv2.subtract(smooth, background), smooth
+    return cv2.subtract(smooth, background, dst=background), smooth
 
 
 def _wide_background(smooth: np.ndarray, diameter: int, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
@@ -488,21 +488,24 @@ def detect_spots(
     radius = diameter // 2
     band, smooth = _band_and_smooth(gray, diameter, settings.polarity)
     # Only light standing out of the noise counts for centroids and mass (Crocker and Grier
-    # clip the band-passed frame at a low level).
-    positive = cv2.threshold(band, settings.floor, 0, cv2.THRESH_TOZERO)[1]
+    # clip the band-passed frame at a low level). It is written inside a border of zeros
+    # ``radius`` wide, so that a disc about any pixel of the frame can be read without clipping.
+    height, width = gray.shape
+    padded = np.empty((height + 2 * radius, width + 2 * radius), np.float32)
+    padded[:radius], padded[-radius:], padded[:, :radius], padded[:, -radius:] = 0, 0, 0, 0
+    positive = cv2.threshold(band, settings.floor, 0, cv2.THRESH_TOZERO, dst=padded[radius:-radius, radius:-radius])[1]
     if roi is not None:
-        positive = np.where(roi > 0, positive, np.float32(0))
+        positive[roi == 0] = 0
     # A candidate is the brightest pixel of the square of side 1.6 radii about it (two fast
     # 1-D passes), so that touching spots, whose peaks lie about a diameter apart, both count;
     # the maxima of one spot that this leaves meet when refined and are merged.
     side = 2 * int(np.ceil(0.8 * radius)) + 1
     local_max = cv2.dilate(positive, np.ones((side, side), np.uint8))
-    peaks = cv2.bitwise_and(cv2.compare(positive, local_max, cv2.CMP_EQ), cv2.compare(positive, 0.0, cv2.CMP_GT))
-    found = cv2.findNonZero(peaks)
-    if found is None:
+    # numpy's nonzero is four times as fast as OpenCV's on a mask of booleans.
+    peaks = np.logical_and(cv2.compare(positive, local_max, cv2.CMP_EQ), cv2.compare(positive, 0.0, cv2.CMP_GT))
+    rows, columns = np.divmod(np.flatnonzero(peaks), width)
+    if rows.size == 0:
         return _empty()
-    columns, rows = found.reshape(-1, 2).T.astype(np.intp)
-    padded = cv2.copyMakeBorder(positive, radius, radius, radius, radius, cv2.BORDER_CONSTANT, value=0)
     dy, dx = _disc(radius)
     # diameter - 1 is 6 sigma of the spot: a window of 1.5 sigma, wide enough that a defocused
     # bead's centre does not hop between its lobes, narrow enough to keep a neighbour out.
@@ -559,12 +562,20 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
     moments = np.stack([np.ones_like(dx), dx, dy], axis=1).astype(np.float32)
     scale = np.float32(-1 / (2 * window**2))
     windowed = np.empty_like(weights)
-    for _ in range(_WINDOW_ITERATIONS):
-        # The window is separable: one exponential per row and column offset of each disc.
-        across = np.exp(scale * (span[None, :] - ox[:, None]) ** 2)
-        down = np.exp(scale * (span[None, :] - oy[:, None]) ** 2)
-        np.multiply(weights, across[:, dx + radius], out=windowed)
-        total, sx, sy = (np.multiply(windowed, down[:, dy + radius], out=windowed) @ moments).T
+    column, row = dx + radius, dy + radius
+    for step in range(_WINDOW_ITERATIONS):
+        # The window is separable: one exponential per row and column offset of each disc
+        # (the same for all at the first step, centred on the disc).
+        if step == 0:
+            across = down = np.exp(scale * span**2)
+            np.multiply(weights, across[column], out=windowed)
+            np.multiply(windowed, down[row], out=windowed)
+        else:
+            across = np.exp(scale * (span[None, :] - ox[:, None]) ** 2)
+            down = np.exp(scale * (span[None, :] - oy[:, None]) ** 2)
+            np.multiply(weights, across[:, column], out=windowed)
+            np.multiply(windowed, down[:, row], out=windowed)
+        total, sx, sy = (windowed @ moments).T
         total = np.maximum(total, np.float32(1e-30))
         ox, oy = sx / total, sy / total
     return ox.astype(float), oy.astype(float)
@@ -598,29 +609,30 @@ def _refine(
     mass = weights.sum(axis=1)
     hopeful = mass > _PREFILTER * min_mass
     rows, columns, weights, mass = rows[hopeful], columns[hopeful], weights[hopeful], mass[hopeful]
-    active = np.arange(rows.size)
     gauss = np.exp(-(dx * dx + dy * dy) / (2 * window**2)).astype(np.float32)
     # The first moments in float64 by one matrix product, at a sixth of the time of summing
     # pixel by pixel and with the same result: products of float32 light and whole offsets are
     # exact in float64, and so are their sums while a disc's lit pixels span less than about
     # 10^6 (the floor clips off fainter light), in whatever order they are added.
     arms = np.column_stack((dx, dy)).astype(np.float64)
+    # The discs still moving, and their pixels.
+    active, current = np.arange(rows.size), weights
     for _ in range(_MAX_ITERATIONS):
-        w = weights[active] * gauss
+        w = current * gauss
         m = np.maximum(w.sum(axis=1), 1e-30)
         first = w.astype(np.float64) @ arms
         ox, oy = first[:, 0] / m, first[:, 1] / m
-        step_x = np.where(ox > _SHIFT_PX, 1, np.where(ox < -_SHIFT_PX, -1, 0))
-        step_y = np.where(oy > _SHIFT_PX, 1, np.where(oy < -_SHIFT_PX, -1, 0))
-        moving = (step_x != 0) | (step_y != 0)
-        active, step_x, step_y = active[moving], step_x[moving], step_y[moving]
-        if active.size == 0:
+        step_x = (ox > _SHIFT_PX).astype(np.intp) - (ox < -_SHIFT_PX)
+        step_y = (oy > _SHIFT_PX).astype(np.intp) - (oy < -_SHIFT_PX)
+        moving = np.flatnonzero(step_x | step_y)
+        if moving.size == 0:
             break
-        columns[active] = np.clip(columns[active] + step_x, 0, width - 2 * radius - 1)
-        rows[active] = np.clip(rows[active] + step_y, 0, height - 2 * radius - 1)
-        moved = flat[(rows[active] * width + columns[active])[:, None] + offsets]
-        weights[active] = moved
-        mass[active] = moved.sum(axis=1)
+        active = active[moving]
+        columns[active] = np.clip(columns[active] + step_x[moving], 0, width - 2 * radius - 1)
+        rows[active] = np.clip(rows[active] + step_y[moving], 0, height - 2 * radius - 1)
+        current = flat[(rows[active] * width + columns[active])[:, None] + offsets]
+        weights[active] = current
+        mass[active] = current.sum(axis=1)
     return rows, columns, mass, weights
 
 

@@ -1,4 +1,4 @@
-"""Work over frames in several processes: the same results, in the same order, as one."""
+"""Work over frames in several processes or threads: the same results, in the same order, as one."""
 
 import functools
 import threading
@@ -17,13 +17,15 @@ def _square_or_fail(value: int) -> int:
     return value * value
 
 
-def test_ordered_map_keeps_the_order_of_the_items():
+@pytest.mark.parametrize("threads", [False, True])
+def test_ordered_map_keeps_the_order_of_the_items(threads):
     items = range(40)
-    assert list(ordered_map(_square_or_fail, (i for i in items if i != 7), workers=2)) == [i * i for i in items if i != 7]
+    assert list(ordered_map(_square_or_fail, (i for i in items if i != 7), workers=2, threads=threads)) == [i * i for i in items if i != 7]
 
 
-def test_an_error_in_a_worker_is_raised_at_its_item():
-    results = ordered_map(_square_or_fail, range(10), workers=2)
+@pytest.mark.parametrize("threads", [False, True])
+def test_an_error_in_a_worker_is_raised_at_its_item(threads):
+    results = ordered_map(_square_or_fail, range(10), workers=2, threads=threads)
     assert [next(results) for _ in range(7)] == [i * i for i in range(7)]
     with pytest.raises(ValueError, match="seven"):
         next(results)
@@ -51,6 +53,12 @@ def test_leaving_read_ahead_early_stops_its_thread():
     # At most the item handed over, one queued and one waiting to be queued were taken.
     assert len(taken) <= 3
     assert not any(thread.name == "read-ahead" for thread in threading.enumerate())
+
+
+def test_threads_take_a_function_no_process_could_be_sent():
+    offset = 3
+    assert list(ordered_map(lambda value: value + offset, range(20), workers=2, threads=True)) == list(range(3, 23))
+    assert not any(thread.name.startswith("ordered-map") for thread in threading.enumerate())
 
 
 def test_a_partial_is_sent_once_and_applied_to_arrays():

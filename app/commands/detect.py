@@ -23,6 +23,7 @@ from seedtrack.detection.choice import describe
 from seedtrack.detection.roi import Circle
 
 from ..errors import UsageError, in_option_names, output_file
+from ..parallel import default_workers
 from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
@@ -229,7 +230,8 @@ def run(args: argparse.Namespace) -> int:
     for target in (args.out, args.preview):
         if target is not None:
             check_target(target)
-    found = detect_clip(args.input, settings, preview_frame)
+    # As many detection threads as cores: the detections do not depend on the number.
+    found = detect_clip(args.input, settings, preview_frame, workers=default_workers())
     rows = found.detections.to_rows()
     write_table(args.out, rows)
     frames = len(found.detections.frame_indices)

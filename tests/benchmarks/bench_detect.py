@@ -11,7 +11,7 @@ seconds of this process (a busy shared machine inflates wall-clock time):
   decoding alone and decoding plus that detector (decoding threads as the reader sets them,
   detection on one core), in CPU seconds;
 - the same as ``seedtrack`` runs it (:func:`seedtrack.pipeline.detect_clip`: decoding in a
-  thread of its own beside detection, ``--workers`` 1 and 2), in wall-clock seconds of the work
+  thread of its own beside detection in 1 or 2 threads, ``--workers`` 1 and 2), in wall-clock seconds of the work
   alone (a fresh process each, imports not counted), on the same two clips; decoding alone and
   each way of detecting are run in turn, and the ratio is taken within each turn. Wall-clock
   time is only meaningful on a quiet machine: the load average is printed beside it.
