@@ -56,6 +56,18 @@ def test_a_gap_up_to_max_gap_is_filled_and_a_longer_one_ends_the_track():
     assert rows_by_track(split) == [(list(range(4)), [0] * 4), (list(range(12)), [0] * 12), (list(range(7, 12)), [0] * 5)]
 
 
+def test_max_slaves_ends_heads_early_and_gap_closing_still_joins_within_max_gap():
+    hidden = {(0, k) for k in range(4, 7)}  # RIGHT misses frames 4, 5 and 6
+    frames = frames_of(RIGHT, DOWN, missing=hidden)
+    joined = goa_updown_open(frames, lifecycle=LifecycleConfig(max_gap=3, max_slaves=1))
+    assert rows_by_track(joined) == [(list(range(12)), [0] * 12), (list(range(12)), [0, 0, 0, 0, 1, 1, 1, 0, 0, 0, 0, 0])]
+    # Without gap closing, the head that ended after one slave leaves RIGHT in two tracks.
+    split = goa_updown_open(frames, lifecycle=LifecycleConfig(max_gap=3, max_slaves=1, close_gaps=False))
+    assert rows_by_track(split) == [(list(range(4)), [0] * 4), (list(range(12)), [0] * 12), (list(range(7, 12)), [0] * 5)]
+    with pytest.raises(ValueError, match="max_slaves"):
+        LifecycleConfig(max_slaves=-1)
+
+
 def test_tracks_open_where_points_arrive_and_end_where_they_leave():
     late = RIGHT.copy()
     late[:3] = np.nan  # arrives in frame 3

@@ -165,3 +165,24 @@ def test_motion_is_refused_by_trackers_that_do_not_read_it(tmp_path, capsys):
     assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv"), "--algorithm", "nn", "--motion", "random"]) == 2
     assert "--motion only apply to --algorithm goa or goa-updown" in capsys.readouterr().err
     assert not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.parametrize("scene, slaves", [("walkers", 3), ("dish", None)])
+def test_heads_of_a_measured_random_walk_keep_three_slaves_and_smooth_motion_max_gap(monkeypatch, scene, slaves):
+    import seedtrack.tracking.linking as linking
+
+    if scene == "walkers":
+        points, _ = generate_walkers(WalkerSpec(walkers=150, frames=12, sigma=1.5, missed=0.05, random_seed=3))
+    else:
+        points = make_dish_scene(DishSpec(seeds=40, frames=10, hidden_probability=0.1, random_seed=3)).visible_points()
+    seen = []
+    passes = linking.goa_updown_open
+
+    def recording(frames, config, lifecycle, *args, **kwargs):
+        seen.append(lifecycle.max_slaves)
+        return passes(frames, config, lifecycle, *args, **kwargs)
+
+    monkeypatch.setattr(linking, "goa_updown_open", recording)
+    linking.link_goa(points)
+    # The first pass (nearest neighbour or IM2) keeps max_gap; the measured passes are the ones fitted.
+    assert seen[0] is None and seen[1:] == [slaves] * (len(seen) - 1) and len(seen) == 3

@@ -142,14 +142,20 @@ class LifecycleConfig:
         start at most this many frames later.
     close_gaps : bool
         Join track ends to later starts after the passes (see :mod:`seedtrack.tracking.gap_closing`).
+    max_slaves : int or None
+        Longest run of slaves a head keeps in the passes, frames, when shorter than ``max_gap``;
+        gap closing still joins a track end to a start up to ``max_gap`` frames later. None: ``max_gap``.
     """
 
     max_gap: int = 10
     close_gaps: bool = True
+    max_slaves: int | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_gap, (int, np.integer)) and self.max_gap >= 0):
             raise ValueError(f"max_gap must be a whole number of frames >= 0, got {self.max_gap}")
+        if self.max_slaves is not None and not (isinstance(self.max_slaves, (int, np.integer)) and self.max_slaves >= 0):
+            raise ValueError(f"max_slaves must be a whole number of frames >= 0 or None, got {self.max_slaves}")
 
     @property
     def start(self) -> OpenTracks:
@@ -157,7 +163,7 @@ class LifecycleConfig:
 
     @property
     def end(self) -> EndTracks:
-        return EndTracks(self.max_gap)
+        return EndTracks(self.max_gap if self.max_slaves is None else min(self.max_gap, self.max_slaves))
 
     @property
     def gaps(self) -> FillGaps:

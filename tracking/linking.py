@@ -10,6 +10,7 @@ IM2 follows chance alignments from one neighbour to the next.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
-from .adaptive import REFITS, track_measured_motion
+from .adaptive import RANDOM_WALK_SLAVES, REFITS, random_walk, track_measured_motion
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks, point_frames
 
@@ -112,7 +113,10 @@ def link_goa(
             return goa(moved, initial, fitted, first_frame, progress=progress)
         if algorithm == "goa-updown-fixed" or lifecycle is None:
             return goa_updown(moved, fitted, first_frame, progress=progress)
-        return goa_updown_open(moved, fitted, lifecycle, first_frame, progress=progress)
+        kept = lifecycle
+        if lifecycle.max_slaves is None and random_walk(fitted):
+            kept = replace(lifecycle, max_slaves=RANDOM_WALK_SLAVES)
+        return goa_updown_open(moved, fitted, kept, first_frame, progress=progress)
 
     if motion == "auto" and not keep_model:
         tracks, fit = track_measured_motion(frames, config, track)

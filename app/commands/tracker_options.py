@@ -51,8 +51,8 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         metavar="N",
-        help=f"a track ends after N missed frames in a row; gaps up to N frames are filled by interpolation "
-        f"(interpolated=1) and a track end is joined to a track start at most N frames later "
+        help=f"a track ends after N missed frames in a row (3 in the passes where the motion measured is a random walk); "
+        f"gaps up to N frames are filled by interpolation (interpolated=1) and a track end is joined to a track start at most N frames later "
         f"(default {LifecycleConfig().max_gap})",
     )
     group.add_argument(
