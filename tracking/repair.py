@@ -187,21 +187,20 @@ def _change_cost(before: np.ndarray, change: np.ndarray, statistics: MotionStati
     """Twice the negative log-likelihood of velocity changes (..., 2) after velocities ``before``
     (..., 2), under the noise along and across ``before`` where it was measured apart: at a near
     crossing of PSMG-like motion the two pairings differ mostly in one of the two."""
-    speed2 = np.einsum("...i,...i->...", before, before)
+    b0, b1, c0, c1 = before[..., 0], before[..., 1], change[..., 0], change[..., 1]
+    speed2 = b0 * b0 + b1 * b1
+    squared = c0 * c0 + c1 * c1
     if statistics.along is None or statistics.across is None:
         variance = statistics.noise**2 + statistics.relative**2 * speed2
-        return np.einsum("...i,...i->...", change, change) / (2.0 * variance) + np.log(variance)
+        return squared / (2.0 * variance) + np.log(variance)
     along = statistics.along[0] ** 2 + statistics.along[1] ** 2 * speed2
     across = statistics.across[0] ** 2 + statistics.across[1] ** 2 * speed2
-    speed = np.sqrt(speed2)
+    # The change's parts along and across ``before``, times its speed: no unit vector is formed.
+    dot, cross = b0 * c0 + b1 * c1, b0 * c1 - b1 * c0
+    moving = speed2 > 0
     # A point at rest has no direction: its change is scored on the mean of the two variances.
-    moving = speed > 0
-    unit = np.where(moving[..., None], before / np.where(moving, speed, 1.0)[..., None], 0.0)
-    a = np.einsum("...i,...i->...", change, unit)
-    c = change[..., 1] * unit[..., 0] - change[..., 0] * unit[..., 1]
-    mean = 0.5 * (along + across)
-    still = np.einsum("...i,...i->...", change, change) / (2.0 * mean) + np.log(mean)
-    return np.where(moving, a * a / (2.0 * along) + c * c / (2.0 * across) + 0.5 * np.log(along * across), still)
+    still = squared / (along + across)
+    return np.where(moving, (dot * dot / along + cross * cross / across) / (2.0 * np.where(moving, speed2, 1.0)), still) + 0.5 * np.log(along * across)
 
 
 __all__ = ["resolve_crossings"]
