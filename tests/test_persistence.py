@@ -92,6 +92,40 @@ def test_a_swap_at_a_crossing_is_undone_by_the_frames_after_it():
     assert np.allclose(resolve_crossings(Tracks.from_dense(kinked, np.zeros((2, 9), np.int64)), sigma_one).xy, parallel)
 
 
+def test_speed_steps_and_turns_are_measured_apart():
+    # Speed steps of a fixed 1.2 px (0.1 of the mean speed) and turns of 10 degrees (2.1 px across
+    # at 12 px/frame): along the velocity the change hardly grows with the speed, across it grows
+    # by about tan(10 deg) per pixel/frame.
+    _, smooth = generate_held_out(HeldOutSpec(kind="smooth", points=60, speed=12.0, speed_step=0.1, turn_step=10.0, random_seed=3))
+    stats = fit_statistics(smooth)
+    (along_noise, along_relative), (across_noise, across_relative) = stats.along, stats.across
+    assert along_noise == across_noise == pytest.approx(1.2, rel=0.3)
+    assert along_relative < 0.08 and 0.09 < across_relative < 0.2
+    # A random walk has no direction to tell apart.
+    _, walkers = generate_walkers(WalkerSpec(walkers=100, frames=10, sigma=1.5, random_seed=2))
+    walk = fit_statistics(walkers)
+    assert walk.along[1] < 0.1 and walk.across[1] < 0.1
+
+
+def test_a_crossing_is_decided_by_the_noise_along_and_across_the_velocity():
+    # Two points 0.2 px apart at frame 3: one turns there (2 px across), the other goes on. Joined
+    # the other way, each track changes speed by 0.8 px and turns by 1 px: less change in all,
+    # but a speed change is the unlikely kind here (along sigma 1 px, across 2 px).
+    t = np.arange(7.0)[:, None] - 3
+    a = np.where(t <= 0, t * [10.0, 0.0], t * [10.0, 2.0]) + 100.0
+    b = t * [10.8, 1.0] + [100.2, 100.1]
+    truth = np.stack((a, b))
+    swapped = truth.copy()
+    swapped[:, 4:] = truth[::-1, 4:]
+    apart = MotionStatistics(1.0, np.sqrt(2.5), 0.0, (0.0, 0.0), 10.0, 100, along=(1.0, 0.0), across=(2.0, 0.0))
+    for start in (truth, swapped):
+        fixed = resolve_crossings(Tracks.from_dense(start.copy(), np.zeros((2, 7), np.int64)), apart)
+        assert np.allclose(fixed.xy, truth)
+    # The same noise taken alike in every direction prefers the other pairing of the tails.
+    alike = MotionStatistics(1.0, np.sqrt(2.5), 0.0, (0.0, 0.0), 10.0, 100)
+    assert np.allclose(resolve_crossings(Tracks.from_dense(truth.copy(), np.zeros((2, 7), np.int64)), alike).xy[:, 4:], swapped[:, 4:])
+
+
 def test_the_first_step_of_a_random_walk_is_not_exchanged_for_free():
     # No triplet judges a track's first step (persistence 0: it is no one's "before" either); it
     # is scored against the drift with the spread of the steps, so a swap there is undone.

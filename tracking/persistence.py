@@ -65,6 +65,11 @@ class MotionStatistics:
     fastest : float
         99th percentile of the speeds about the drift on the chains that fit the model,
         pixels/frame (wrong links seldom chain smoothly, so this is the true motion's).
+    along, across : tuple of float or None
+        (noise, relative) of the velocity change along the last velocity and across it, as
+        ``noise`` and ``relative`` are per axis (pixels/frame, per pixel/frame of speed): speed
+        steps and turns differ (PSMG-like motion: speed steps of a fixed size, turns that grow
+        with the speed). None: both are ``noise`` and ``relative``.
     """
 
     persistence: float
@@ -75,6 +80,8 @@ class MotionStatistics:
     triplets: int
     turn: float = 0.0
     fastest: float = 0.0
+    along: tuple[float, float] | None = None
+    across: tuple[float, float] | None = None
 
     def describe(self) -> str:
         """One line for the user."""
@@ -225,10 +232,12 @@ def fit_chains(chains: Chains) -> MotionStatistics:
             noise2, relative2 = _non_negative_fit(speed2[keep], squared[keep])
             noise2, relative2 = noise2 / _KEPT_MEAN, relative2 / _KEPT_MEAN
             variance = np.maximum(noise2 + relative2 * speed2, _MIN_NOISE**2)
+            fitted = keep
         keep = squared / variance <= _CUT
         if keep.sum() < _MIN_TRIPLETS:
             keep = squared <= np.quantile(squared, 0.5)
     fastest = float(np.quantile(np.sqrt(speed2[keep]), _FASTEST)) if keep.any() else 0.0
+    along, across = _components(b_all[fitted], a_all[fitted], speed2[fitted], persistence, turn, noise2)
     return MotionStatistics(
         persistence,
         max(float(np.sqrt(noise2)), _MIN_NOISE),
@@ -238,7 +247,28 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         triplets,
         turn,
         fastest,
+        along,
+        across,
     )
+
+
+def _components(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, persistence: float, turn: float, noise2: float):
+    """(noise, relative) of the velocity changes along and across the velocity before them, on
+    the chains the isotropic fit kept and scaled as it is. Both share its noise at speed 0 (a
+    point at rest has no direction; fitted apart, a turn after a near stop was a dozen sigmas
+    across) and each has its own growth with the speed. A chain with no velocity before it has no
+    direction and is left out."""
+    moving = speed2 > 0
+    before, after, speed2 = before[moving], after[moving], speed2[moving]
+    if before.shape[0] < _MIN_TRIPLETS:
+        return None, None
+    change = after - persistence * _turned(before, turn)
+    unit = before / np.sqrt(speed2)[:, None]
+    parts = (change[:, 0] * unit[:, 0] + change[:, 1] * unit[:, 1], change[:, 1] * unit[:, 0] - change[:, 0] * unit[:, 1])
+    raw, _ = _non_negative_fit(speed2, parts[0] * parts[0])
+    weight = max(float(np.dot(speed2, speed2)), 1e-12)
+    noise = max(float(np.sqrt(raw / _KEPT_MEAN)), _MIN_NOISE)
+    return tuple((noise, float(np.sqrt(max(float(np.dot(speed2, part * part - raw)) / weight, 0.0) / _KEPT_MEAN))) for part in parts)
 
 
 def _turned(v: np.ndarray, angle: float) -> np.ndarray:

@@ -9,7 +9,8 @@ telling apart, and compares, over the five frames around it (Veenman, Reinders a
 extended temporal scope, reduced to pairs), the links as they are with the two points
 exchanged in that frame alone and with the tails exchanged from that frame on or from the next;
 the pairing whose velocity changes are most likely under the measured motion
-(:class:`seedtrack.tracking.persistence.MotionStatistics`) is kept. A track whose velocity
+(:class:`seedtrack.tracking.persistence.MotionStatistics`, its noise along and across the
+velocity apart: speed steps and turns) is kept. A track whose velocity
 kinks in a frame is also paired with every track near it there, out to the final pass's gate:
 after a wrong link nearby it may hold a neighbour's point that was never close to its own.
 Pairs are found with a KD-tree per frame, so the work grows with the number of close
@@ -171,16 +172,35 @@ def _window_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics
     linked = seen[..., 1:] & seen[..., :-1]
     both = linked[..., 1:] & linked[..., :-1]
     before, after = step[:, :, :-1], step[:, :, 1:]
-    variance = statistics.noise**2 + statistics.relative**2 * np.einsum("...i,...i->...", before, before)
     change = after - statistics.persistence * _turned(before.reshape(-1, 2), statistics.turn).reshape(before.shape)
-    with np.errstate(invalid="ignore"):  # unmeasured positions are NaN, and left out by the masks
-        triplets = np.where(both, np.einsum("...i,...i->...", change, change) / (2.0 * variance) + np.log(variance), 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):  # unmeasured positions are NaN, and left out by the masks
+        triplets = np.where(both, _change_cost(before, change, statistics), 0.0)
     lacking = both[0].size - both.sum(axis=(1, 2))
     opening = linked.copy()
     opening[..., 1:] &= ~linked[..., :-1]
     spread2 = statistics.spread**2 + statistics.noise**2
     first = np.where(opening, np.einsum("...i,...i->...", step, step), 0.0).sum(axis=(1, 2))
     return triplets.sum(axis=(1, 2)) + first / (2.0 * spread2) + opening.sum(axis=(1, 2)) * np.log(spread2) + lacking * GATE**2 / 2.0
+
+
+def _change_cost(before: np.ndarray, change: np.ndarray, statistics: MotionStatistics) -> np.ndarray:
+    """Twice the negative log-likelihood of velocity changes (..., 2) after velocities ``before``
+    (..., 2), under the noise along and across ``before`` where it was measured apart: at a near
+    crossing of PSMG-like motion the two pairings differ mostly in one of the two."""
+    b0, b1, c0, c1 = before[..., 0], before[..., 1], change[..., 0], change[..., 1]
+    speed2 = b0 * b0 + b1 * b1
+    squared = c0 * c0 + c1 * c1
+    if statistics.along is None or statistics.across is None:
+        variance = statistics.noise**2 + statistics.relative**2 * speed2
+        return squared / (2.0 * variance) + np.log(variance)
+    along = statistics.along[0] ** 2 + statistics.along[1] ** 2 * speed2
+    across = statistics.across[0] ** 2 + statistics.across[1] ** 2 * speed2
+    # The change's parts along and across ``before``, times its speed: no unit vector is formed.
+    dot, cross = b0 * c0 + b1 * c1, b0 * c1 - b1 * c0
+    moving = speed2 > 0
+    # A point at rest has no direction: its change is scored on the mean of the two variances.
+    still = squared / (along + across)
+    return np.where(moving, (dot * dot / along + cross * cross / across) / (2.0 * np.where(moving, speed2, 1.0)), still) + 0.5 * np.log(along * across)
 
 
 __all__ = ["resolve_crossings"]
