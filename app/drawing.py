@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from dataclasses import dataclass
 from typing import Iterable, Iterator, Sequence
 
@@ -399,15 +400,17 @@ def _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, li
     pixels.put(flat, blended.view("V3").reshape(-1))
 
 
-_SCRATCH: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
+# Each thread's own layers: frames may be drawn in several threads at once.
+_SCRATCH = threading.local()
 
 
 def _scratch(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Two zeroed uint8 layers of a frame's (height, width), reused from frame to frame (and left zeroed)."""
-    if shape not in _SCRATCH:
-        _SCRATCH.clear()
-        _SCRATCH[shape] = (np.zeros(shape, np.uint8), np.zeros(shape, np.uint8))
-    return _SCRATCH[shape]
+    """Two zeroed uint8 layers of a frame's (height, width), reused from frame to frame by this
+    thread (and left zeroed)."""
+    layers = getattr(_SCRATCH, "layers", None)
+    if layers is None or layers[0].shape != shape:
+        _SCRATCH.layers = layers = (np.zeros(shape, np.uint8), np.zeros(shape, np.uint8))
+    return layers
 
 
 def draw_heads(canvas, xy: np.ndarray, groups: np.ndarray, colours: list, hollow: np.ndarray, style: Style) -> None:
@@ -661,6 +664,10 @@ def _glyph_layers(picture: np.ndarray, colour: tuple[int, int, int]) -> tuple[np
     return keep, ink
 
 
+# A FreeType face is not to be used by two threads at once.
+_FONT_LOCK = threading.Lock()
+
+
 @functools.lru_cache(maxsize=16)
 def _truetype(pixels: int) -> ImageFont.FreeTypeFont:
     return ImageFont.load_default(size=pixels)
@@ -671,14 +678,15 @@ def _draw_halo(text: str, font: float, thickness: int) -> tuple[np.ndarray, int,
     halo), channel 3 the glyphs' coverage (0-255); and the text origin's position in that picture
     (left, top)."""
     pixels = max(6, round(_PIXELS_PER_FONT_SCALE * font))
-    face = _truetype(pixels)
     # The halo grows with the font, so that large text stands out as well as small.
     reach = max(thickness // 2 + 1, round(pixels / 10))
     pad = reach + 1
-    left, top, right, bottom = face.getbbox(text, anchor="ls")
-    size = (right - left + 2 * pad, bottom - top + 2 * pad)
-    written = Image.new("L", size, 0)
-    ImageDraw.Draw(written).text((pad - left, pad - top), text, fill=255, font=face, anchor="ls")
+    with _FONT_LOCK:
+        face = _truetype(pixels)
+        left, top, right, bottom = face.getbbox(text, anchor="ls")
+        size = (right - left + 2 * pad, bottom - top + 2 * pad)
+        written = Image.new("L", size, 0)
+        ImageDraw.Draw(written).text((pad - left, pad - top), text, fill=255, font=face, anchor="ls")
     glyphs = np.asarray(written)
     grow = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * reach + 1, 2 * reach + 1))
     keep = 255 - cv2.dilate(glyphs, grow)

@@ -1,10 +1,12 @@
-"""Work over the frames of a clip on several cores, with results in the order of the frames.
+"""Work over the frames of a clip on both cores (or more), with results in the order of the frames.
 
-Frames are independent for detection and for drawing, so each is one task; what every task needs
-(detector options, the track layers) goes to each worker once, when it starts. Workers are
-processes rather than threads: PyAV's decoder and encoder hold Python's global lock, so threads
-beside them wait (encoding 150 frames took 8.6 s instead of 2.0 s beside one busy Python thread).
-At most a few frames per worker are in flight, so memory does not grow with the clip.
+Frames are independent for detection and for drawing, so each is one task for a thread
+(:func:`threaded_map`): OpenCV's calls and numpy's operations on whole frames let go of Python's
+lock, and PyAV's decoder does too, so threads of one process share the cores without pickling
+frames or starting processes (which on a 300-frame clip cost more than detecting its frames).
+The x264 encoder has a process of its own (:class:`VideoEncoder`), so that it never waits for
+drawing's turn at the lock, started early enough that starting it overlaps other work. At most
+a few frames per worker are in flight, so memory does not grow with the clip.
 """
 
 from __future__ import annotations
@@ -16,12 +18,11 @@ import os
 import queue
 import signal
 import threading
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
-from seedtrack.allocation import set_malloc_options
 from seedtrack.data.video import write_video
 
 Item = TypeVar("Item")
@@ -30,15 +31,9 @@ Result = TypeVar("Result")
 # Frames queued per worker beyond the one it is on: enough to hide the hand-over, few enough
 # that frames in flight stay a few megabytes.
 _QUEUED_PER_WORKER = 2
-# Workers are started by a fork server: a clean process (no decoder or OpenCV threads copied
-# half-way through their work, as fork would) that has imported these once, so that each
-# worker starts in milliseconds instead of importing numpy, OpenCV and PyAV again.
-# Where glibc maps allocations from the system (and unmaps them when freed), and the free memory
-# its heap keeps, both fixed at this many bytes in a worker. Left to glibc, a worker mapped and
-# unmapped its frame-sized temporaries on every frame, and detection there took twice the CPU
-# time it takes in the main process.
-_HEAP_REUSE_BYTES = 32 * 1024 * 1024
-_PRELOAD = ["seedtrack.parallel", "seedtrack.drawing", "seedtrack.detection.blobs", "seedtrack.detection.spots", "seedtrack.data.video"]
+# The encoder's process is started by a fork server: a clean process (no decoder or OpenCV
+# threads copied half-way through their work, as fork would) that has imported the encoder once.
+_PRELOAD = ["seedtrack.parallel"]
 
 
 def default_workers() -> int:
@@ -76,27 +71,21 @@ def process_context() -> multiprocessing.context.BaseContext:
     return context
 
 
-def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int, threads: bool = False) -> Iterator[Result]:
-    """``function(item)`` for each item, in the items' order, computed by ``workers`` processes
-    (or threads).
+def threaded_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int) -> Iterator[Result]:
+    """``function(item)`` for each item, in the items' order, computed by ``workers`` threads.
 
-    With one worker (or where no process can be started) everything runs here, one item at a
-    time, so the results are the same whatever ``workers`` is as long as ``function`` depends
-    only on its item.
+    For work that lets go of Python's lock for most of its time, as detection does (OpenCV's
+    calls on whole frames): nothing is pickled and no process started, which on a 300-frame clip
+    cost more than detecting its frames. Results are the same whatever ``workers`` is as long as
+    ``function`` depends only on its item and may be called from several threads at once.
 
     Parameters
     ----------
     function : callable
-        Picklable (a module-level function or a ``functools.partial`` of one); sent to each
-        worker once.
     items : iterable
-        Consumed a few items per worker ahead of the results; each is pickled to a worker.
+        Consumed a few items per thread ahead of the results.
     workers : int
-        Processes (threads), >= 1.
-    threads : bool
-        Threads of this process instead: no process to start and nothing pickled, for work
-        that lets go of Python's lock most of the time (OpenCV's calls, numpy's operations on
-        whole frames); ``function`` need not be picklable.
+        Threads, >= 1; with one, everything runs in the calling thread.
 
     Yields
     ------
@@ -104,28 +93,30 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
 
     Example
     -------
-    >>> list(ordered_map(abs, [-3, 1, -2], workers=1))
+    >>> list(threaded_map(abs, [-3, 1, -2], workers=2))
     [3, 1, 2]
     """
-    if workers <= 1 or not (threads or can_start_processes()):
+    if workers <= 1:
         yield from map(function, items)
         return
-    if threads:
-        pool, task = ThreadPoolExecutor(workers, thread_name_prefix="ordered-map"), function
-    else:
-        pool, task = ProcessPoolExecutor(workers, mp_context=process_context(), initializer=_install, initargs=(function,)), _apply
-    with pool:
-        pending: collections.deque = collections.deque()
-        try:
-            for item in items:
-                pending.append(pool.submit(task, item))
-                if len(pending) > workers * (1 + _QUEUED_PER_WORKER):
-                    yield pending.popleft().result()
-            while pending:
+    with ThreadPoolExecutor(workers, thread_name_prefix="worker") as pool:
+        yield from _in_order(pool, function, items, workers)
+
+
+def _in_order(pool: Executor, function: Callable[[Item], Result], items: Iterable[Item], workers: int) -> Iterator[Result]:
+    """Results of ``function`` on ``items`` submitted to ``pool``, in order, with a few items per
+    worker in flight; those not started yet are cancelled if the results are left unread."""
+    pending: collections.deque = collections.deque()
+    try:
+        for item in items:
+            pending.append(pool.submit(function, item))
+            if len(pending) > workers * (1 + _QUEUED_PER_WORKER):
                 yield pending.popleft().result()
-        finally:
-            for future in pending:
-                future.cancel()
+        while pending:
+            yield pending.popleft().result()
+    finally:
+        for future in pending:
+            future.cancel()
 
 
 @contextlib.contextmanager
@@ -185,73 +176,102 @@ def read_ahead(items: Iterable[Item], depth: int = 4) -> Iterator[Iterator[Item]
         reader.join()
 
 
-def encode_video(path, frames: Iterable[np.ndarray], fps: float, workers: int, progress=None) -> int:
-    """:func:`seedtrack.data.video.write_video` of ``frames``, in a process of its own when
-    ``workers`` > 1, so that drawing the next frames goes on while x264 encodes.
+class VideoEncoder:
+    """:func:`seedtrack.data.video.write_video` started before its frames are ready: with
+    ``workers`` > 1 the encoder's process starts at once, so that starting it (and the fork
+    server, the first time) overlaps whatever this process does before :meth:`write`.
 
     The encoder's settings (one x264 thread among them) do not change with ``workers``: the
-    file is the same, byte for byte, either way.
+    file is the same, byte for byte, either way. Leaving the block without having written
+    stops the encoder, and no file is left behind.
 
     Parameters
     ----------
     path : path-like
         Output MP4, written atomically.
-    frames : iterable of ndarray of uint8
-        (H, W, 3) BGR or (H, W) gray frames, all the same size, consumed one at a time.
     fps : float
         Frames per second.
     workers : int
-        1: encode here; more: encode in a separate process.
-    progress : tqdm-like or callable, optional
-        Ticked once per frame handed to the encoder.
-
-    Returns
-    -------
-    int
-        Number of frames written.
-
-    Raises
-    ------
-    ValueError, DataError
-        As :func:`~seedtrack.data.video.write_video`; an error of the frames' iterator is
-        raised as it is, and no file is left behind.
+        1: encode in this process, in :meth:`write`; more: in a process of its own.
 
     Example
     -------
     >>> import numpy as np, tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
-    >>> encode_video(folder / "grey.mp4", [np.full((32, 32), 128, np.uint8)] * 3, 25.0, workers=1)
+    >>> with VideoEncoder(folder / "grey.mp4", 25.0, workers=1) as encoder:
+    ...     encoder.write([np.full((32, 32), 128, np.uint8)] * 3)
     3
     """
-    if workers <= 1 or not can_start_processes():
-        return write_video(path, frames, fps, progress=progress)
-    ours, theirs = multiprocessing.Pipe()
-    encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps), daemon=True)
-    encoder.start()
-    theirs.close()
-    tick = progress.update if hasattr(progress, "update") else progress
-    try:
+
+    def __init__(self, path, fps: float, workers: int) -> None:
+        self.path, self.fps = path, fps
+        self._encoder = self._ours = None
+        if workers > 1 and can_start_processes():
+            self._ours, theirs = multiprocessing.Pipe()
+            self._encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps), daemon=True)
+            self._encoder.start()
+            theirs.close()
+
+    def __enter__(self) -> "VideoEncoder":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the encoder's process (an encoder still waiting for frames gives up and removes
+        its temporary file)."""
+        if self._encoder is not None:
+            self._ours.close()
+            self._encoder.join()
+            self._encoder = None
+
+    def write(self, frames: Iterable[np.ndarray], progress=None) -> int:
+        """Encode ``frames`` into :attr:`path` (once per encoder).
+
+        Parameters
+        ----------
+        frames : iterable of ndarray of uint8
+            (H, W, 3) BGR or (H, W) gray frames, all the same size, consumed one at a time.
+        progress : tqdm-like or callable, optional
+            Ticked once per frame handed to the encoder.
+
+        Returns
+        -------
+        int
+            Number of frames written.
+
+        Raises
+        ------
+        ValueError, DataError
+            As :func:`~seedtrack.data.video.write_video`; an error of the frames' iterator is
+            raised as it is, and no file is left behind.
+        """
+        if self._encoder is None:
+            return write_video(self.path, frames, self.fps, progress=progress)
+        ours = self._ours
+        tick = progress.update if hasattr(progress, "update") else progress
         try:
-            for frame in frames:
-                frame = np.ascontiguousarray(frame)
-                ours.send((frame.shape, frame.dtype.str))
-                ours.send_bytes(memoryview(frame).cast("B"))
-                if tick is not None:
-                    tick(1)
-            ours.send(None)
-        except (BrokenPipeError, ConnectionResetError):
-            pass  # the encoder stopped at a bad frame: its answer says why
-        outcome, value = ours.recv()
-    except EOFError:
-        raise RuntimeError(f"the video encoder for {path} stopped (exit status {encoder.exitcode})") from None
-    finally:
-        # Closing our end first tells an encoder still waiting for frames to give up and remove
-        # its temporary file.
-        ours.close()
-        encoder.join()
-    if outcome == "failed":
-        raise value
-    return value
+            try:
+                for frame in frames:
+                    frame = np.ascontiguousarray(frame)
+                    ours.send((frame.shape, frame.dtype.str))
+                    ours.send_bytes(memoryview(frame).cast("B"))
+                    if tick is not None:
+                        tick(1)
+                ours.send(None)
+            except (BrokenPipeError, ConnectionResetError):
+                pass  # the encoder stopped at a bad frame: its answer says why
+            outcome, value = ours.recv()
+        except EOFError:
+            raise RuntimeError(f"the video encoder for {self.path} stopped (exit status {self._encoder.exitcode})") from None
+        finally:
+            # Closing our end first tells an encoder still waiting for frames to give up and
+            # remove its temporary file.
+            self.close()
+        if outcome == "failed":
+            raise value
+        return value
 
 
 def _encode_received(connection, path: str, fps: float) -> None:
@@ -274,23 +294,3 @@ def _encode_received(connection, path: str, fps: float) -> None:
         connection.send(answer)
     except (BrokenPipeError, ConnectionResetError):
         pass
-
-
-_FUNCTION: Callable | None = None
-
-
-def _install(function: Callable) -> None:
-    """Worker initialiser: keep the function every task of this pool applies."""
-    global _FUNCTION
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    _reuse_heap_memory()
-    _FUNCTION = function
-
-
-def _reuse_heap_memory() -> None:
-    """Have glibc serve frame-sized allocations of this process from memory it keeps."""
-    set_malloc_options(M_MMAP_THRESHOLD=_HEAP_REUSE_BYTES, M_TRIM_THRESHOLD=_HEAP_REUSE_BYTES)
-
-
-def _apply(item):
-    return _FUNCTION(item)

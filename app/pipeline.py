@@ -32,7 +32,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
 from .points import TrackingSettings, group_points, track_frames
-from .parallel import encode_video, ordered_map, read_ahead
+from .parallel import VideoEncoder, read_ahead, threaded_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
@@ -41,6 +41,9 @@ __all__ = [
     "DETECTORS", "Detections", "DetectionSettings", "ClipDetections",
     "detect_clip", "render_overlay", "run_pipeline",
 ]
+
+# Past positions in each track's fading trail on the overlay of `run`.
+TRAIL = 10
 
 
 @dataclass(frozen=True)
@@ -123,7 +126,7 @@ def detect_clip(
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
     workers : int
-        Threads detecting frames (see :func:`seedtrack.parallel.ordered_map`); the result is
+        Threads detecting frames (see :func:`seedtrack.parallel.threaded_map`); the result is
         the same for any number.
 
     Raises
@@ -159,7 +162,7 @@ def detect_clip(
             # OpenCV and numpy without Python's lock, and a clip of a few hundred frames took
             # longer to detect in two processes than in one (starting them, pickling frames).
             with read_ahead(source) as read:
-                detections = detect_frames(frames(read), detector, functools.partial(ordered_map, workers=workers, threads=True))
+                detections = detect_frames(frames(read), detector, functools.partial(threaded_map, workers=workers))
         if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
@@ -200,17 +203,23 @@ def render_overlay(
     detections: Detections,
     out: Path,
     fps: float,
-    trail: int = 10,
+    trail: int = TRAIL,
     selection: DetectionSettings | None = None,
     workers: int = 1,
 ) -> None:
     """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`seedtrack.drawing`),
     of the frames ``selection.start``, ``end`` and ``step`` select, if given.
 
-    Detections that no track holds are marked as false detections. With ``workers`` > 1 the
-    encoder has a process of its own and ``workers`` - 1 processes draw (one: this one); the
-    file is the same for any number.
+    Detections that no track holds are marked as false detections. ``workers`` threads draw
+    and, with more than one, the encoder has a process of its own; the file is the same for any
+    number.
     """
+    with VideoEncoder(out, fps, workers) as encoder:
+        _render(path, tracks, detections, encoder, trail, selection, workers)
+
+
+def _render(path: Path, tracks: Tracks, detections: Detections, encoder: VideoEncoder, trail: int, selection: DetectionSettings | None, workers: int) -> None:
+    """:func:`render_overlay` into an encoder already started."""
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
         view = View.of(source.size)
@@ -220,7 +229,7 @@ def render_overlay(
         draw = functools.partial(_annotate_pair, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
         # The next frames decode beside drawing, as in detection.
         with progress_bar(source.frame_count, "rendering") as bar, read_ahead(source) as read:
-            encode_video(out, ordered_map(draw, read, workers - 1), fps, workers, progress=bar)
+            encoder.write(threaded_map(draw, read, workers), progress=bar)
 
 
 def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
@@ -232,9 +241,9 @@ def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection uses ``workers``
-    threads, drawing and encoding ``workers`` processes (see :func:`render_overlay`); the files
-    are the same for any number.
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
+    ``workers`` threads, and with more than one the encoder a process of its own, started before
+    tracking; the files are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
@@ -246,7 +255,9 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
         write_table(out / "detections.csv", rows)
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
-        tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
-        write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-        render_overlay(clip, tracks, detections, out / "overlay.mp4", found.fps, selection=detection, workers=workers)
+        # The encoder's process starts beside tracking, which runs on one core.
+        with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
+            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
+            write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
+            _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks

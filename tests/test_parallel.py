@@ -1,6 +1,5 @@
-"""Work over frames in several processes or threads: the same results, in the same order, as one."""
+"""Work over frames in several threads: the same results, in the same order, as one."""
 
-import functools
 import threading
 
 import numpy as np
@@ -8,7 +7,7 @@ import pytest
 
 from seedtrack.cli import main
 from seedtrack.data.dish import DishSpec, write_dish_clip
-from seedtrack.parallel import default_workers, ordered_map, read_ahead
+from seedtrack.parallel import VideoEncoder, default_workers, read_ahead, threaded_map
 
 
 def _square_or_fail(value: int) -> int:
@@ -17,15 +16,13 @@ def _square_or_fail(value: int) -> int:
     return value * value
 
 
-@pytest.mark.parametrize("threads", [False, True])
-def test_ordered_map_keeps_the_order_of_the_items(threads):
+def test_threaded_map_keeps_the_order_of_the_items():
     items = range(40)
-    assert list(ordered_map(_square_or_fail, (i for i in items if i != 7), workers=2, threads=threads)) == [i * i for i in items if i != 7]
+    assert list(threaded_map(_square_or_fail, (i for i in items if i != 7), workers=2)) == [i * i for i in items if i != 7]
 
 
-@pytest.mark.parametrize("threads", [False, True])
-def test_an_error_in_a_worker_is_raised_at_its_item(threads):
-    results = ordered_map(_square_or_fail, range(10), workers=2, threads=threads)
+def test_an_error_in_a_worker_is_raised_at_its_item():
+    results = threaded_map(_square_or_fail, range(10), workers=2)
     assert [next(results) for _ in range(7)] == [i * i for i in range(7)]
     with pytest.raises(ValueError, match="seven"):
         next(results)
@@ -57,13 +54,24 @@ def test_leaving_read_ahead_early_stops_its_thread():
 
 def test_threads_take_a_function_no_process_could_be_sent():
     offset = 3
-    assert list(ordered_map(lambda value: value + offset, range(20), workers=2, threads=True)) == list(range(3, 23))
-    assert not any(thread.name.startswith("ordered-map") for thread in threading.enumerate())
+    assert list(threaded_map(lambda value: value + offset, range(20), workers=2)) == list(range(3, 23))
+    assert not any(thread.name.startswith("worker") for thread in threading.enumerate())
 
 
-def test_a_partial_is_sent_once_and_applied_to_arrays():
-    add = functools.partial(np.add, np.arange(3))
-    assert [a.tolist() for a in ordered_map(add, [np.ones(3), np.zeros(3)], workers=2)] == [[1, 2, 3], [0, 1, 2]]
+def test_an_encoder_left_without_frames_stops_and_leaves_no_file(tmp_path):
+    # As when tracking fails after the encoder's process was started beside it.
+    with VideoEncoder(tmp_path / "overlay.mp4", 25.0, workers=2) as encoder:
+        process = encoder._encoder
+        assert process.is_alive()
+    assert not process.is_alive() and list(tmp_path.iterdir()) == []
+
+
+def test_an_encoder_started_early_writes_what_one_in_this_process_writes(tmp_path):
+    frames = [np.full((32, 48, 3), value, np.uint8) for value in (0, 90, 200)]
+    for workers in (1, 2):
+        with VideoEncoder(tmp_path / f"{workers}.mp4", 25.0, workers) as encoder:
+            assert encoder.write(iter(frames)) == 3
+    assert (tmp_path / "1.mp4").read_bytes() == (tmp_path / "2.mp4").read_bytes()
 
 
 def test_default_workers_is_the_usable_cores():
@@ -71,7 +79,7 @@ def test_default_workers_is_the_usable_cores():
 
 
 def test_run_gives_the_same_bytes_with_one_two_and_three_workers(tmp_path):
-    # With three the overlay is drawn in worker processes too, not only encoded in one.
+    # With two and three frames are detected and drawn in threads, and encoded in a process.
     write_dish_clip(DishSpec(seeds=20, frames=12, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
     for workers in ("1", "2", "3"):
         assert main(["run", str(tmp_path / "clip" / "clip.mp4"), "--out", str(tmp_path / workers), "--workers", workers]) == 0

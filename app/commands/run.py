@@ -14,13 +14,13 @@ from .tracker_options import add_tracker_options, tracking_settings
 
 
 def add_workers_option(parser: argparse.ArgumentParser) -> None:
-    """``--workers N``: threads and processes working on one clip (the files do not depend on it)."""
+    """``--workers N``: threads working on one clip (the files do not depend on it)."""
     parser.add_argument(
         "--workers",
         type=int,
         default=None,
         metavar="N",
-        help=f"threads detecting, processes drawing and encoding at once; the files are the same for any N "
+        help=f"threads detecting and drawing at once (beside them, with N > 1, an encoder process); the files are the same for any N "
         f"(default: the cores this program may use, here {default_workers()})",
     )
 

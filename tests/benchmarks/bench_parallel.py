@@ -12,7 +12,12 @@ Run as ``python tests/benchmarks/bench_parallel.py [--quick]``. Prints, for a ge
 and, for generated 128x128 clips of 2,000 and 20,000 frames with 6 seeds, ``run``'s peak memory
 (``--workers 1``, one process: its maximum resident set) and their ratio (the goal: at most 1.2).
 ``--quick`` skips the 20,000-frame clip, ``--memory-only`` the 300-frame clip, and ``--repeats N``
-measures each long clip N times and prints the median of each and of their ratio. Wall times on a shared machine include what other
+measures each long clip N times and prints the median of each and of their ratio. ``--phases``
+prints instead, for one ``run --workers 2`` of the 300-frame clip, each phase's wall time and the
+CPU time of every thread of ``run`` and of the processes it starts (read from /proc every 20 ms),
+with the wall time two free cores would need at least: the larger of half the phase's CPU time
+and its busiest thread's (imports not counted). CPU times change little with the load, so on a
+busy machine that bound says what the wall time alone cannot. Wall times on a shared machine include what other
 programs take; run it when the machine is quiet, and read the CPU times beside them.
 """
 
@@ -95,10 +100,14 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="skip the 20,000-frame clip")
     parser.add_argument("--memory-only", action="store_true", help="skip the 300-frame clip (cores and frames/s)")
     parser.add_argument("--repeats", type=int, default=1, metavar="N", help="peak memory measurements per long clip (default 1)")
+    parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of one run with 2 workers")
     args = parser.parse_args()
     become_subreaper()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
+        if args.phases:
+            phases(folder)
+            return
         if not args.memory_only:
             cores(folder)
         long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
@@ -118,6 +127,102 @@ def cores(folder: Path) -> None:
         print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} |")
     same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
     print(f"files identical for 1 and {default_workers()} workers: {same}")
+
+
+_PHASES = """
+import os, sys, threading, time
+from pathlib import Path
+import seedtrack.pipeline as pipeline
+
+TICK = os.sysconf("SC_CLK_TCK")
+ME = os.getpid()
+seen, marks, lock = {}, [], threading.Lock()
+
+
+def descendants():
+    children = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                children.setdefault(int(open(f"/proc/{entry}/stat").read().rsplit(")", 1)[1].split()[1]), []).append(int(entry))
+            except OSError:
+                pass
+    found, todo = [], [ME]
+    while todo:
+        found.append(todo.pop())
+        todo += children.get(found[-1], [])
+    return found
+
+
+def sample():
+    with lock:
+        for pid in descendants():
+            try:
+                threads = os.listdir(f"/proc/{pid}/task")
+            except OSError:
+                continue
+            for tid in threads:
+                try:
+                    fields = open(f"/proc/{pid}/task/{tid}/stat").read().rsplit(")", 1)[1].split()
+                except OSError:
+                    continue
+                seen[(pid, int(tid))] = (int(fields[11]) + int(fields[12])) / TICK
+
+
+def sampler():
+    while True:
+        sample()
+        time.sleep(0.02)
+
+
+def mark(name):
+    sample()
+    with lock:
+        marks.append((name, time.perf_counter(), dict(seen)))
+
+
+def marked(name, function):
+    def call(*args, **kwargs):
+        mark(name)
+        return function(*args, **kwargs)
+    return call
+
+
+if __name__ == "__main__":
+    pipeline.detect_clip = marked("detection", pipeline.detect_clip)
+    pipeline.track_frames = marked("tracking", pipeline.track_frames)
+    pipeline._render = marked("overlay", pipeline._render)
+    threading.Thread(target=sampler, daemon=True).start()
+    mark("")
+    pipeline.run_pipeline(Path(sys.argv[1]), Path(sys.argv[2]), workers=2)
+    time.sleep(0.1)  # the encoder's last CPU time is read before it is reaped
+    mark("end")
+    for (name, start, before), (_, end, after) in zip(marks[1:], marks[2:]):
+        spent = sorted((after[key] - before.get(key, 0.0) for key in after), reverse=True)
+        print("phase", name, end - start, sum(spent), *spent[:3])
+"""
+
+
+def phases(folder: Path) -> None:
+    """Per phase of ``run --workers 2`` on the 300-frame clip: wall, CPU, busiest threads and the
+    least wall time two free cores would need."""
+    clip = folder / "dish" / "clip.mp4"
+    write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
+    script = folder / "phases.py"
+    script.write_text(_PHASES)
+    load = os.getloadavg()[0]
+    lines = subprocess.run([sys.executable, str(script), str(clip), str(folder / "out")], check=True, capture_output=True, text=True).stdout.splitlines()
+    print(f"run --workers 2, 300 frames, 640x512, 80 seeds; load average {load:.1f}; imports not counted")
+    print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
+    print("| --- | --- | --- | --- | --- |")
+    totals = [0.0, 0.0, 0.0]
+    for line in (line for line in lines if line.startswith("phase ")):
+        name, wall, cpu, *busiest = line.split()[1:]
+        wall, cpu, busiest = float(wall), float(cpu), [float(value) for value in busiest]
+        bound = max(cpu / 2, busiest[0])
+        totals = [totals[0] + wall, totals[1] + cpu, totals[2] + bound]
+        print(f"| {name} | {wall:.2f} | {cpu:.2f} | {', '.join(f'{value:.2f}' for value in busiest)} | {bound:.2f} |")
+    print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
 
 
 def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
