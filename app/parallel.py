@@ -38,7 +38,10 @@ _QUEUED_PER_WORKER = 2
 # unmapped its frame-sized temporaries on every frame, and detection there took twice the CPU
 # time it takes in the main process.
 _HEAP_REUSE_BYTES = 32 * 1024 * 1024
-_PRELOAD = ["seedtrack.parallel", "seedtrack.drawing", "seedtrack.detection.blobs", "seedtrack.detection.spots", "seedtrack.data.video"]
+# The first leaves Ctrl-C to the command: a terminal's Ctrl-C reaches every process of its group,
+# and the fork server took it while importing the others (seconds on a loaded machine), printing
+# a traceback of its own beside the command's one line.
+_PRELOAD = ["seedtrack.ctrl_c_ignored", "seedtrack.parallel", "seedtrack.drawing", "seedtrack.detection.blobs", "seedtrack.detection.spots", "seedtrack.data.video"]
 
 
 def default_workers() -> int:
@@ -76,6 +79,25 @@ def process_context() -> multiprocessing.context.BaseContext:
     return context
 
 
+@contextlib.contextmanager
+def _ctrl_c_held() -> Iterator[None]:
+    # A submit may start a worker; Ctrl-C half-way through handing it its start-up data made
+    # this process exit while the worker was still reading it, and the worker printed a traceback
+    # (its pool's semaphore already gone). Held here, Ctrl-C is raised once the worker has it,
+    # in place of any error the block met meanwhile (a fork server that Ctrl-C stopped).
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda *_: caught.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught and callable(previous):
+            previous(signal.SIGINT, None)
+
+
 def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int) -> Iterator[Result]:
     """``function(item)`` for each item, in the items' order, computed by ``workers`` processes.
 
@@ -109,7 +131,8 @@ def ordered_map(function: Callable[[Item], Result], items: Iterable[Item], worke
         pending: collections.deque = collections.deque()
         try:
             for item in items:
-                pending.append(pool.submit(_apply, item))
+                with _ctrl_c_held():
+                    pending.append(pool.submit(_apply, item))
                 if len(pending) > workers * (1 + _QUEUED_PER_WORKER):
                     yield pending.popleft().result()
             while pending:
@@ -218,7 +241,8 @@ def encode_video(path, frames: Iterable[np.ndarray], fps: float, workers: int, p
         return write_video(path, frames, fps, progress=progress)
     ours, theirs = multiprocessing.Pipe()
     encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps), daemon=True)
-    encoder.start()
+    with _ctrl_c_held():
+        encoder.start()
     theirs.close()
     tick = progress.update if hasattr(progress, "update") else progress
     try:
