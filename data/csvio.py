@@ -133,7 +133,8 @@ def read_table(
     Returns
     -------
     dict of str to ndarray
-        One array per column, in file order. Columns with a range in
+        One array per column, in file order, without a first column of no name (the row index
+        pandas writes by default). Columns with a range in
         :data:`seedtrack.data.numbers.RANGES` (frame, x, y, ...) have been checked against it.
 
     Raises
@@ -178,7 +179,11 @@ def read_table(
     except pd.errors.ParserError as error:
         raise DataError(path, _parser_problem(error, len(header))) from None
     table: dict[str, np.ndarray] = {}
-    for name in header:
+    for position, name in enumerate(header):
+        if position == 0 and not name:
+            # pandas' to_csv writes the row index first, under an empty name (trackpy's and
+            # laptrack's tables saved as their users save them): no column of the table.
+            continue
         values = frame[name]
         if name in text:
             table[name] = values.to_numpy(dtype=object)
