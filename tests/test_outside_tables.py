@@ -15,3 +15,10 @@ def test_the_row_index_pandas_writes_first_is_no_column(tmp_path):
     tracks = pd.read_csv(tmp_path / "tracks.csv")
     assert list(tracks.columns) == ["track_id", "frame", "x", "y", "interpolated", "mass"]
     assert sorted(tracks.groupby("track_id").x.apply(tuple)) == [(5.0, 7.0), (50.0, 52.0)]
+
+
+def test_an_output_inside_a_file_names_the_file(tmp_path, capsys):
+    (tmp_path / "points.csv").write_text("frame,x,y\n0,1,2\n1,2,2\n")
+    (tmp_path / "notes").write_text("a file, not a folder")
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "notes" / "tracks.csv")]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"seedtrack track: error: {tmp_path / 'notes' / 'tracks.csv'}: {tmp_path / 'notes'} is not a folder"]
