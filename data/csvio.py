@@ -164,7 +164,9 @@ def read_table(
         raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
-        raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")
+        # Excel in many languages saves "CSV" with semicolons, the comma being the decimal mark.
+        separator = "; its fields are separated by semicolons: save it with commas" if len(header) == 1 and ";" in header[0] else ""
+        raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}{separator}")
     text = [name for name in header if others_as_text and name not in required and name not in integer]
     try:
         frame = pd.read_csv(

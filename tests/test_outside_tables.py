@@ -55,3 +55,9 @@ def test_a_trackmate_table_in_microns_or_with_a_bad_value_is_one_line_naming_its
     assert main(["track", str(spots), "--out", str(tmp_path / "tracks.csv")]) == 2
     assert capsys.readouterr().err == f"seedtrack track: error: {spots}: line 6: column POSITION_X holds 'abc', not a number\n"
     assert not (tmp_path / "tracks.csv").exists()
+
+
+def test_a_table_separated_by_semicolons_says_so(tmp_path, capsys):
+    (tmp_path / "points.csv").write_text("frame;x;y\n0;1,5;2\n1;2,5;2\n")
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "tracks.csv")]) == 2
+    assert capsys.readouterr().err.endswith("found frame;x;y; its fields are separated by semicolons: save it with commas\n")
