@@ -33,7 +33,10 @@ Result = TypeVar("Result")
 _QUEUED_PER_WORKER = 2
 # The encoder's process is started by a fork server: a clean process (no decoder or OpenCV
 # threads copied half-way through their work, as fork would) that has imported the encoder once.
-_PRELOAD = ["seedtrack.parallel"]
+# The first preload leaves Ctrl-C to the command: a terminal's Ctrl-C reaches every process of its
+# group, and the fork server took it while importing the others (seconds on a loaded machine),
+# printing a traceback of its own beside the command's one line.
+_PRELOAD = ["seedtrack.ctrl_c_ignored", "seedtrack.parallel"]
 
 
 def default_workers() -> int:
@@ -69,6 +72,25 @@ def process_context() -> multiprocessing.context.BaseContext:
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(_PRELOAD)
     return context
+
+
+@contextlib.contextmanager
+def _ctrl_c_held() -> Iterator[None]:
+    # A submit may start a worker; Ctrl-C half-way through handing it its start-up data made
+    # this process exit while the worker was still reading it, and the worker printed a traceback
+    # (its pool's semaphore already gone). Held here, Ctrl-C is raised once the worker has it,
+    # in place of any error the block met meanwhile (a fork server that Ctrl-C stopped).
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda *_: caught.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught and callable(previous):
+            previous(signal.SIGINT, None)
 
 
 def threaded_map(function: Callable[[Item], Result], items: Iterable[Item], workers: int) -> Iterator[Result]:
@@ -209,7 +231,8 @@ class VideoEncoder:
         if workers > 1 and can_start_processes():
             self._ours, theirs = multiprocessing.Pipe()
             self._encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps), daemon=True)
-            self._encoder.start()
+            with _ctrl_c_held():
+                self._encoder.start()
             theirs.close()
 
     def __enter__(self) -> "VideoEncoder":

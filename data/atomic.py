@@ -23,12 +23,12 @@ def check_target(path: str | os.PathLike) -> Path:
     Raises
     ------
     DataError
-        If the target's folder does not exist, or the target is a folder.
+        If the target's folder does not exist or is a file, or the target is a folder.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
-        raise DataError(target, f"folder {folder} does not exist")
+        raise DataError(target, f"{folder} is not a folder" if folder.exists() else f"folder {folder} does not exist")
     if target.is_dir():
         raise DataError(target, "is a folder; give a file name")
     return folder

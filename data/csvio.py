@@ -8,11 +8,12 @@ coordinates.
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import re
 from functools import partial
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 import numpy as np
 import pandas as pd
@@ -114,6 +115,7 @@ def read_table(
     required: tuple[str, ...] = (),
     integer: tuple[str, ...] = ("frame", "track_id", "interpolated"),
     others_as_text: bool = False,
+    label_rows: int = 0,
 ) -> dict[str, np.ndarray]:
     """Read a CSV table with a header row into numeric columns (through pandas' C parser).
 
@@ -129,11 +131,14 @@ def read_table(
     others_as_text : bool
         Keep every column that is neither required nor integer as text, exactly as written,
         so that it can be copied to another file unchanged.
+    label_rows : int
+        Lines after the header that hold no data (TrackMate's names, short names and units).
 
     Returns
     -------
     dict of str to ndarray
-        One array per column, in file order. Columns with a range in
+        One array per column, in file order, without a first column of no name (the row index
+        pandas writes by default). Columns with a range in
         :data:`seedtrack.data.numbers.RANGES` (frame, x, y, ...) have been checked against it.
 
     Raises
@@ -159,13 +164,16 @@ def read_table(
         raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
-        raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}")
+        # Excel in many languages saves "CSV" with semicolons, the comma being the decimal mark.
+        separator = "; its fields are separated by semicolons: save it with commas" if len(header) == 1 and ";" in header[0] else ""
+        raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}{separator}")
     text = [name for name in header if others_as_text and name not in required and name not in integer]
     try:
         frame = pd.read_csv(
             path,
             header=0,
             names=header,
+            skiprows=range(1, 1 + label_rows),
             index_col=False,
             encoding="utf-8-sig",
             dtype={name: str for name in text},
@@ -178,12 +186,16 @@ def read_table(
     except pd.errors.ParserError as error:
         raise DataError(path, _parser_problem(error, len(header))) from None
     table: dict[str, np.ndarray] = {}
-    for name in header:
+    for position, name in enumerate(header):
+        if position == 0 and not name:
+            # pandas' to_csv writes the row index first, under an empty name (trackpy's and
+            # laptrack's tables saved as their users save them): no column of the table.
+            continue
         values = frame[name]
         if name in text:
             table[name] = values.to_numpy(dtype=object)
             continue
-        table[name] = _numeric_column(path, name, values, name in required, name in integer)
+        table[name] = _numeric_column(path, name, values, name in required, name in integer, partial(data_lines, path, label_rows=label_rows))
     return table
 
 
@@ -204,7 +216,7 @@ def _parser_problem(error: Exception, fields: int) -> str:
     return f"not a readable CSV table ({' '.join(str(error).split())})"
 
 
-def _numeric_column(path: Path, name: str, values: "pd.Series", required: bool, integer: bool) -> np.ndarray:
+def _numeric_column(path: Path, name: str, values: "pd.Series", required: bool, integer: bool, lines: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     numbers = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
     unparsed = _text(values)
     if unparsed.any() and not (required or integer):
@@ -213,13 +225,13 @@ def _numeric_column(path: Path, name: str, values: "pd.Series", required: bool, 
         bad = int(np.flatnonzero(~np.isfinite(numbers))[0])
         written = _as_written(values, bad)
         problem = "is empty" if not written.strip() else f"holds {written!r}, " + ("not a number" if unparsed[bad] else "not a finite number")
-        raise DataError(path, f"line {data_lines(path, bad)}: column {name} {problem}")
+        raise DataError(path, f"line {lines(bad)}: column {name} {problem}")
     if integer:
         whole = numbers == np.round(numbers)
         if not whole.all():
             bad = int(np.flatnonzero(~whole)[0])
-            raise DataError(path, f"line {data_lines(path, bad)}: column {name} holds {_as_written(values, bad)!r}, not a whole number")
-    check_range(path, name, numbers, partial(data_lines, path))
+            raise DataError(path, f"line {lines(bad)}: column {name} holds {_as_written(values, bad)!r}, not a whole number")
+    check_range(path, name, numbers, lines)
     return numbers.astype(np.int64) if integer else numbers
 
 
@@ -237,16 +249,21 @@ def _as_written(values: "pd.Series", row: int) -> str:
     return "" if value is None or (isinstance(value, float) and np.isnan(value)) else str(value)
 
 
-def data_lines(path: Path, rows: np.ndarray | None = None) -> np.ndarray:
+def data_lines(path: Path, rows: np.ndarray | None = None, label_rows: int = 0) -> np.ndarray:
     """The 1-based line of each data row of a CSV file (or of the rows given by position): every
-    line after the header that is not blank, as pandas reads it. For error messages only: it
-    reads the file again."""
-    lines = np.array([number for number, line in text_lines(path) if line.strip()][1:], dtype=np.int64)
+    line after the header (and its ``label_rows``) that is not blank, as pandas reads it. For
+    error messages only: it reads the file again."""
+    lines = np.array([number for number, line in text_lines(path) if line.strip()][1 + label_rows :], dtype=np.int64)
     return lines if rows is None else lines[rows]
 
 
 def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[str, np.ndarray]:
     """Read a table of measured points (columns frame, x, y and any others), each point once.
+
+    A TrackMate spot table (its CSV export, or the spots table saved from its window: columns
+    ``FRAME``, ``POSITION_X``, ``POSITION_Y`` and others, maybe with TrackMate's three rows of
+    names, short names and units under the header) is read as ``frame``, ``x``, ``y``, its other
+    columns kept; positions in another unit than pixels are refused.
 
     A row that repeats an earlier row's frame, x and y is the same measurement twice (a file
     joined with itself, a detection written twice): it is dropped, with a warning naming the
@@ -277,7 +294,13 @@ def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[s
     ...     read_points(points)["x"]
     array([1., 2.])
     """
-    table = read_table(path, required=("frame", "x", "y"), integer=("frame",), others_as_text=others_as_text)
+    path = Path(path)
+    names, label_rows = _point_columns(path)
+    table = read_table(path, required=tuple(names), integer=tuple(names)[:1], others_as_text=others_as_text, label_rows=label_rows)
+    if label_rows or tuple(names) != ("frame", "x", "y"):
+        table = {names.get(name, name): values for name, values in table.items()}
+        for name in ("frame", "x", "y"):
+            check_range(path, name, table[name], partial(data_lines, path, label_rows=label_rows))
     frame, x, y = table["frame"], table["x"], table["y"]
     order = np.lexsort((np.arange(frame.size), y, x, frame))
     same = (np.diff(frame[order]) == 0) & (np.diff(x[order]) == 0) & (np.diff(y[order]) == 0)
@@ -289,8 +312,36 @@ def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[s
     repeats = order[~starts]
     first = int(np.argmin(repeats))
     earlier, first = int(earliest[~starts][first]), int(repeats[first])
-    lines = data_lines(Path(path), np.array([earlier, first]))
+    lines = data_lines(path, np.array([earlier, first]), label_rows)
     warn(path, f"{repeats.size} row(s) repeat an earlier row's frame, x and y (first line {lines[1]}, as line {lines[0]}); each point is read once")
     keep = np.ones(frame.size, bool)
     keep[repeats] = False
     return {name: values[keep] for name, values in table.items()}
+
+
+# TrackMate's spot features that are our point columns: both count frames from 0, and TrackMate's
+# pixel coordinates put pixel centres at integers, as ours do.
+TRACKMATE_POINT_COLUMNS = {"FRAME": "frame", "POSITION_X": "x", "POSITION_Y": "y"}
+
+
+def _point_columns(path: Path) -> tuple[dict[str, str], int]:
+    """The columns of ``path`` that are frame, x and y (file name to ours), and how many rows
+    under the header hold no data."""
+    check_table_name(path)
+    check_file(path)
+    header = _header(path)
+    if {"frame", "x", "y"} <= set(header) or not set(TRACKMATE_POINT_COLUMNS) <= set(header):
+        return {"frame": "frame", "x": "x", "y": "y"}, 0
+    lines = text_lines(path)
+    rows = [line for _, line in itertools.islice((item for item in lines if item[1].strip()), 1, 4)]
+    lines.close()
+    frame_at, x_at = header.index("FRAME"), header.index("POSITION_X")
+    fields = [next(csv.reader([line])) for line in rows]
+    # TrackMate 7 writes under the keys the features' names, short names and units; only those
+    # three rows are skipped, so that a data row is never taken for one.
+    label_rows = 3 if len(fields) == 3 and len(fields[0]) > frame_at and fields[0][frame_at].strip() == "Frame" else 0
+    if label_rows and len(fields[2]) > x_at:
+        unit = fields[2][x_at].strip().strip("()")
+        if unit and unit.lower() not in ("pixel", "pixels"):
+            raise DataError(path, f"line 4: TrackMate's positions are in {unit}, not pixels; export them from the image with its pixel size set to 1 pixel (Image > Properties)")
+    return dict(TRACKMATE_POINT_COLUMNS), label_rows

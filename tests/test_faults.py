@@ -139,7 +139,8 @@ def test_pandas_reads_what_we_write_and_names_the_line_past_blank_lines(tmp_path
     [
         (["--scale", "100"], "--scale 100 draws 32000x24000 frames"),
         (["--scale", "0.001"], "--scale 0.001 draws 0x0 frames"),
-        (["--fps", "100000"], "--fps must be above 0 and at most 1000"),
+        (["--fps", "100000"], "--fps must be at least 0.01 and at most 1000"),
+        (["--fps", "2.23e-311"], "--fps must be at least 0.01 and at most 1000"),
         (["--frame", "-1"], "--frame must be a 0-based frame index >= 0, got -1"),
     ],
 )

@@ -23,6 +23,9 @@ from ..wording import counted
 DEFAULT_TRAIL = 10
 # Beyond what any player shows, or GIF's 1/100 s frame delays can hold.
 _MAX_FPS = 1000
+# A GIF holds a frame's delay as a 16-bit count of hundredths of a second (at most 655 s), and a
+# rate near zero overflowed it; one frame per 100 s is slower than anyone plays a clip.
+_MIN_FPS = 0.01
 
 
 def add_view_options(parser: argparse.ArgumentParser, out_required: bool) -> None:
@@ -83,8 +86,8 @@ def check_view_options(args: argparse.Namespace) -> str | None:
         raise UsageError(f"--step must be at least 1, got {args.step}")
     if args.trail < 0:
         raise UsageError(f"--trail must be >= 0, got {args.trail}")
-    if args.fps is not None and not 0 < args.fps <= _MAX_FPS:
-        raise UsageError(f"--fps must be above 0 and at most {_MAX_FPS} frames per second, got {args.fps:g}")
+    if args.fps is not None and not _MIN_FPS <= args.fps <= _MAX_FPS:
+        raise UsageError(f"--fps must be at least {_MIN_FPS:g} and at most {_MAX_FPS} frames per second, got {args.fps:g}")
     kind = output_kind(args.out) if args.out is not None else None
     if args.frame is not None and kind != "png":
         raise UsageError("--frame chooses the frame of a .png output; use --start/--end/--step for clips")
