@@ -237,7 +237,7 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         if keep.sum() < _MIN_TRIPLETS:
             keep = squared <= np.quantile(squared, 0.5)
     fastest = float(np.quantile(np.sqrt(speed2[keep]), _FASTEST)) if keep.any() else 0.0
-    along, across = _components(b_all[fitted], a_all[fitted], speed2[fitted], persistence, turn, noise2)
+    along, across = _components(b_all, a_all, speed2, fitted & (speed2 > 0), persistence, turn)
     return MotionStatistics(
         persistence,
         max(float(np.sqrt(noise2)), _MIN_NOISE),
@@ -252,19 +252,25 @@ def fit_chains(chains: Chains) -> MotionStatistics:
     )
 
 
-def _components(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, persistence: float, turn: float, noise2: float):
+def _components(before_all: np.ndarray, after_all: np.ndarray, speed2_all: np.ndarray, use: np.ndarray, persistence: float, turn: float):
     """(noise, relative) of the velocity changes along and across the velocity before them, on
-    the chains the isotropic fit kept and scaled as it is. Both share its noise at speed 0 (a
+    the chains ``use`` marks (those the isotropic fit kept, with a velocity before them: a chain
+    at rest has no direction) and scaled as that fit is. Both share its noise at speed 0 (a
     point at rest has no direction; fitted apart, a turn after a near stop was a dozen sigmas
-    across) and each has its own growth with the speed. A chain with no velocity before it has no
-    direction and is left out."""
-    moving = speed2 > 0
-    before, after, speed2 = before[moving], after[moving], speed2[moving]
-    if before.shape[0] < _MIN_TRIPLETS:
+    across) and each has its own growth with the speed."""
+    if np.count_nonzero(use) < _MIN_TRIPLETS:
         return None, None
-    change = after - persistence * _turned(before, turn)
+    # Taken apart and freed as soon as used: on 10,000 walkers x 100 frames each of these arrays
+    # is 8 to 16 MB, and all of them at once made this the peak of `seedtrack track`.
+    before = before_all[use]
+    change = _turned(before, turn)
+    change *= persistence
+    np.subtract(after_all[use], change, out=change)
+    speed2 = speed2_all[use]
     unit = before / np.sqrt(speed2)[:, None]
+    del before
     parts = (change[:, 0] * unit[:, 0] + change[:, 1] * unit[:, 1], change[:, 1] * unit[:, 0] - change[:, 0] * unit[:, 1])
+    del change, unit
     raw, _ = _non_negative_fit(speed2, parts[0] * parts[0])
     weight = max(float(np.dot(speed2, speed2)), 1e-12)
     noise = max(float(np.sqrt(raw / _KEPT_MEAN)), _MIN_NOISE)
