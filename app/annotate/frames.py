@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from seedtrack.data.errors import DataError
+from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import IMAGE_SUFFIXES, open_frames
 from seedtrack.data.video import open_container
 
@@ -62,7 +63,7 @@ class FrameCache:
         self._cache: OrderedDict[int, bytes] = OrderedDict()
         self._lock = threading.Lock()
         source = open_frames(path)
-        self.size, self.fps, self.frame_count = source.size, source.fps, source.frame_count
+        self.size, self.fps, self.frame_count, self._span = source.size, source.fps, source.frame_count, source.span
         source.close()
         target = Path(path)
         # A video can only be decoded forward; image files can be opened at any frame.
@@ -122,7 +123,7 @@ class FrameCache:
         raise IndexError(index)
 
     def _keep(self, index: int, image) -> bytes:
-        ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        ok, encoded = cv2.imencode(".jpg", to_bgr8(image, self._span), [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         picture = encoded.tobytes()
         self._cache[index] = picture
         while len(self._cache) > self._capacity:

@@ -1,0 +1,110 @@
+"""Frames deeper than 8 bits: files are read at their own depth, so that the API on arrays, the
+API on files and the commands find the same objects, and 12-bit camera data is not lost."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+
+import seedtrack
+from seedtrack.cli import main
+from seedtrack.data.dish import DishSpec, make_dish_scene
+from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
+from seedtrack.detection.blobs import to_gray
+from seedtrack.tracking.metrics import match_frame
+
+FIELD_SEEDS = (11, 12, 13)
+
+
+def spot_fields():
+    """Three frames of light spots on dark (a touching pair and an out-of-focus ring in each)."""
+    return [make_spot_field(SpotFieldSpec(width=128, height=96, spots=12, touching_pairs=1, rings=1, snr=6.0, random_seed=s)) for s in FIELD_SEEDS]
+
+
+def at_depth(units: list[np.ndarray], depth: str) -> list[np.ndarray]:
+    """Frames of values in 0..1 as 8-bit, 12-bit in 16-bit words (as cameras write) or float data."""
+    if depth == "uint8":
+        return [np.round(u * 255).astype(np.uint8) for u in units]
+    if depth == "uint16":
+        return [np.round(u * 4095).astype(np.uint16) for u in units]
+    return [u.astype(np.float32) for u in units]
+
+
+@pytest.fixture(scope="module")
+def fields():
+    found = spot_fields()
+    brightest = max(float(f.image.max()) for f in found)
+    return found, [np.clip(f.image, 0, None) / brightest for f in found]
+
+
+def command_detections(capsys, path, out) -> pd.DataFrame:
+    capsys.readouterr()
+    assert main(["detect", str(path), "--out", str(out)]) == 0, capsys.readouterr().err
+    return pd.read_csv(out)
+
+
+@pytest.mark.parametrize("depth", ["uint8", "uint16", "float32"])
+def test_arrays_tiff_stack_and_command_give_the_same_detections_at_each_depth(fields, depth, tmp_path, capsys):
+    frames = at_depth(fields[1], depth)
+    stack = tmp_path / "stack.tif"
+    assert cv2.imwritemulti(str(stack), frames)
+    on_arrays = seedtrack.detect(frames)
+    assert len(on_arrays) >= 30
+    pd.testing.assert_frame_equal(seedtrack.detect(stack), on_arrays)
+    # The CSV holds positions to four decimals.
+    pd.testing.assert_frame_equal(command_detections(capsys, stack, tmp_path / "d.csv"), on_arrays.round(4), check_dtype=False, atol=1e-9)
+
+
+@pytest.mark.parametrize("depth", ["uint8", "uint16"])
+def test_a_png_folder_gives_the_detections_of_its_arrays(fields, depth, tmp_path, capsys):
+    frames = at_depth(fields[1], depth)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k, frame in enumerate(frames):
+        assert cv2.imwrite(str(folder / f"f{k}.png"), frame)
+    on_arrays = seedtrack.detect(frames)
+    pd.testing.assert_frame_equal(seedtrack.detect(folder), on_arrays)
+    pd.testing.assert_frame_equal(command_detections(capsys, folder, tmp_path / "d.csv"), on_arrays.round(4), check_dtype=False, atol=1e-9)
+
+
+def test_run_on_a_16_bit_stack_detects_as_detect_does_and_draws_its_overlay(fields, tmp_path, capsys):
+    stack = tmp_path / "stack.tif"
+    assert cv2.imwritemulti(str(stack), at_depth(fields[1], "uint16"))
+    command_detections(capsys, stack, tmp_path / "d.csv")
+    assert main(["run", str(stack), "--out", str(tmp_path / "run")]) == 0, capsys.readouterr().err
+    assert (tmp_path / "run" / "detections.csv").read_bytes() == (tmp_path / "d.csv").read_bytes()
+    with seedtrack.open_frames(tmp_path / "run" / "overlay.mp4") as overlay:
+        (_, first), *_ = overlay
+    # Shown from the 12-bit range: the spots are bright, not crushed into the darkest levels.
+    assert first.max() > 200
+
+
+def recall(tables: pd.DataFrame, fields) -> float:
+    matched = 0
+    for k, field in enumerate(fields):
+        rows = tables[tables["frame"] == k]
+        matched += len(match_frame(rows[["x", "y"]].to_numpy(), field.xy, 1.0)[0])
+    return matched / sum(len(field.xy) for field in fields)
+
+
+def test_12_bit_data_in_a_16_bit_tiff_is_found_as_its_8_bit_version(fields, tmp_path):
+    truth, units = fields
+    paths = {}
+    for depth in ("uint8", "uint16"):
+        paths[depth] = tmp_path / f"{depth}.tif"
+        assert cv2.imwritemulti(str(paths[depth]), at_depth(units, depth))
+    eight, twelve = (recall(seedtrack.detect(paths[depth]), truth) for depth in ("uint8", "uint16"))
+    assert eight >= 0.9 and twelve >= eight, (eight, twelve)
+
+
+def test_dark_seeds_in_12_bits_give_the_blobs_of_their_8_bit_frames(tmp_path):
+    greys = [to_gray(frame) for frame in make_dish_scene(DishSpec(seeds=15, frames=3, width=200, height=150, random_seed=4)).frames()]
+    # 4095 / 255 apart: mapped back from the 12-bit range, each level is its 8-bit one again.
+    deep = [np.round(grey * (4095 / 255)).astype(np.uint16) for grey in greys]
+    stack = tmp_path / "seeds.tif"
+    assert cv2.imwritemulti(str(stack), deep)
+    eight = seedtrack.detect(greys, detector="blob")
+    assert len(eight) >= 40
+    pd.testing.assert_frame_equal(seedtrack.detect(stack, detector="blob"), eight)
