@@ -4,11 +4,12 @@ Every source yields ``(frame_index, image)`` one frame at a time: ``frame_index`
 index in the original clip, ``image`` the frame at its own depth, so that a file and the same
 frames handed to :func:`seedtrack.detect` as arrays are detected alike:
 
-- 8-bit data (and every video, decoded to 8 bits): a uint8 (height, width, 3) BGR array
+- 8-bit data (images, and video of 8 bits a component): a uint8 (height, width, 3) BGR array
   (OpenCV layout);
 - deeper data (16-bit, float TIFF or PNG): the values as stored, uint16, float32 or float64
   (other number types as float32), (height, width) for grey, (height, width, 3) BGR for colour;
-  an alpha channel is dropped.
+  an alpha channel is dropped. Video of more bits a component (10-bit H.264, 16-bit grey FFV1)
+  is decoded to uint16, grey (height, width) or BGR (height, width, 3).
 
 Drawing needs 8 bits: :attr:`FrameSource.span` is the source's range of values, read from its
 first frame (:func:`seedtrack.data.depth.value_range`: 0..4095 for 12-bit data in 16-bit
@@ -56,9 +57,10 @@ class FrameSource:
     size : tuple of int
         (width, height) in pixels.
     span : tuple of float
-        (low, high): the values that stand for black and white in this clip, from its first
-        frame (:func:`seedtrack.data.depth.value_range`; (0.0, 255.0) for 8-bit data), as
-        :func:`seedtrack.data.depth.to_bgr8` takes it to show a frame.
+        (low, high): the values that stand for black and white in this clip, as
+        :func:`seedtrack.data.depth.to_bgr8` takes it to show a frame: for images, from the
+        first frame (:func:`seedtrack.data.depth.value_range`; (0.0, 255.0) for 8-bit data);
+        for video, (0.0, 255.0), or (0.0, 65535.0) for video decoded to 16 bits.
     stopped_early : str or None
         After iteration: None, or why it ended before the end of the clip, e.g.
         ``"decoding stopped at frame 57: <reason>"``.
@@ -219,8 +221,12 @@ class _VideoReader(_Reader):
     def __init__(self, path: Path) -> None:
         self.path = path
         self._container = open_container(path)
-        info = video_info(self._container.streams.video[0])
+        stream = self._container.streams.video[0]
+        info = video_info(stream)
         self.length, self.exact, self.fps, self.size = info.frame_count, info.exact, info.fps, info.size
+        self._format = _decoded_format(stream.format)
+        # The decoder scales deeper video to the whole 16 bits, as it scales it to 8 for bgr24.
+        self.span = (0.0, 255.0) if self._format == "bgr24" else (0.0, 65535.0)
         self._used = False
 
     def read(self, start, stop, step):
@@ -239,7 +245,7 @@ class _VideoReader(_Reader):
                 if stop is not None and index >= stop:
                     return
                 if index >= start and (index - start) % step == 0:
-                    yield index, frame.to_ndarray(format="bgr24"), None
+                    yield index, frame.to_ndarray(format=self._format), None
                 index += 1
         except av.FFmpegError as error:
             if index == 0:
@@ -253,6 +259,15 @@ class _VideoReader(_Reader):
         if self._container is not None:
             self._container.close()
             self._container = None
+
+
+def _decoded_format(video_format) -> str:
+    """The pixel format frames of a video in ``video_format`` are decoded to: 8-bit BGR, or for
+    more bits a component 16-bit grey or BGR, so that 10- and 12-bit video keeps its depth."""
+    components = list(video_format.components) if video_format is not None else []
+    if not components or max(component.bits for component in components) <= 8:
+        return "bgr24"
+    return "gray16le" if len(components) == 1 else "bgr48le"
 
 
 class _ImageListReader(_Reader):

@@ -108,3 +108,23 @@ def test_dark_seeds_in_12_bits_give_the_blobs_of_their_8_bit_frames(tmp_path):
     eight = seedtrack.detect(greys, detector="blob")
     assert len(eight) >= 40
     pd.testing.assert_frame_equal(seedtrack.detect(stack, detector="blob"), eight)
+
+
+def test_16_bit_grey_video_keeps_its_depth_and_its_detections(fields, tmp_path):
+    import av
+
+    frames = at_depth(fields[1], "uint16")
+    path = tmp_path / "deep.mkv"
+    with av.open(str(path), "w") as container:
+        # FFV1 keeps 16-bit grey losslessly: the video holds exactly the arrays' values.
+        stream = container.add_stream("ffv1", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 128, 96, "gray16le"
+        for frame in frames:
+            container.mux(stream.encode(av.VideoFrame.from_ndarray(frame, format="gray16le")))
+        container.mux(stream.encode())
+    with seedtrack.open_frames(path) as source:
+        read = [image for _, image in source]
+        assert source.span == (0.0, 65535.0)
+    for got, written in zip(read, frames, strict=True):
+        np.testing.assert_array_equal(got, written)
+    pd.testing.assert_frame_equal(seedtrack.detect(path), seedtrack.detect(frames))

@@ -113,7 +113,7 @@ class FrameCache:
         for got, image in self._iterator:
             self._next = got + 1
             if got == index:
-                return self._keep(index, image)
+                return self._keep(index, to_bgr8(image, self._span))
             if got > index:
                 break
         problem = self._source.stopped_early
@@ -123,7 +123,7 @@ class FrameCache:
         raise IndexError(index)
 
     def _keep(self, index: int, image) -> bytes:
-        ok, encoded = cv2.imencode(".jpg", to_bgr8(image, self._span), [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+        ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         picture = encoded.tobytes()
         self._cache[index] = picture
         while len(self._cache) > self._capacity:
