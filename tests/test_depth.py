@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 import seedtrack
+from seedtrack.annotate.frames import FrameCache
 from seedtrack.cli import main
 from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
@@ -69,16 +70,30 @@ def test_a_png_folder_gives_the_detections_of_its_arrays(fields, depth, tmp_path
     pd.testing.assert_frame_equal(command_detections(capsys, folder, tmp_path / "d.csv"), on_arrays.round(4), check_dtype=False, atol=1e-9)
 
 
-def test_run_on_a_16_bit_stack_detects_as_detect_does_and_draws_its_overlay(fields, tmp_path, capsys):
+def test_run_on_a_16_bit_stack_detects_as_detect_does_and_every_picture_shows_its_range(fields, tmp_path, capsys):
     stack = tmp_path / "stack.tif"
     assert cv2.imwritemulti(str(stack), at_depth(fields[1], "uint16"))
     command_detections(capsys, stack, tmp_path / "d.csv")
-    assert main(["run", str(stack), "--out", str(tmp_path / "run")]) == 0, capsys.readouterr().err
-    assert (tmp_path / "run" / "detections.csv").read_bytes() == (tmp_path / "d.csv").read_bytes()
-    with seedtrack.open_frames(tmp_path / "run" / "overlay.mp4") as overlay:
+    run = tmp_path / "run"
+    assert main(["run", str(stack), "--out", str(run)]) == 0, capsys.readouterr().err
+    assert (run / "detections.csv").read_bytes() == (tmp_path / "d.csv").read_bytes()
+    assert main(["render", str(stack), str(run / "tracks.csv"), "--out", str(tmp_path / "r.png"), "--frame", "1"]) == 0
+    assert main(["review", str(stack), str(run / "tracks.csv"), "--out", str(tmp_path / "review")]) == 0
+    assert main(["detect", str(stack), "--out", str(tmp_path / "p.csv"), "--preview", str(tmp_path / "p.png")]) == 0
+    with seedtrack.open_frames(run / "overlay.mp4") as overlay:
         (_, first), *_ = overlay
-    # Shown from the 12-bit range: the spots are bright, not crushed into the darkest levels.
-    assert first.max() > 200
+    cache = FrameCache(stack)
+    page = cv2.imdecode(np.frombuffer(cache.jpeg(2), np.uint8), cv2.IMREAD_UNCHANGED)
+    cache.close()
+    pictures = [first, page] + [cv2.imread(str(name)) for name in (tmp_path / "r.png", tmp_path / "p.png", *sorted((tmp_path / "review").glob("*.png")))]
+    # Much of each picture is the noisy background at its grey level shown from the 12-bit range
+    # (from the 16-bit words' whole range it would be crushed 16 times darker) under the drawings.
+    level = np.median(at_depth(fields[1], "uint8")[0])
+    assert len(pictures) >= 5 and level >= 20
+    assert [picture.dtype for picture in pictures] == [np.uint8] * len(pictures)
+    shares = [float(np.mean(np.abs(picture.astype(int) - level) <= 4)) for picture in pictures]
+    # (At least 9% of each picture lies within 4 levels of it; crushed, none would.)
+    assert min(shares) > 0.05, shares
 
 
 def recall(tables: pd.DataFrame, fields) -> float:
