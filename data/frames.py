@@ -14,7 +14,8 @@ frames handed to :func:`seedtrack.detect` as arrays are detected alike:
 Drawing needs 8 bits: :attr:`FrameSource.span` is the source's range of values, read from its
 first frame (:func:`seedtrack.data.depth.value_range`: 0..4095 for 12-bit data in 16-bit
 words, 0..1 for float images within it), and :func:`seedtrack.data.depth.to_bgr8` maps any
-frame of it from that range, so that a frame's own brightness does not stretch it.
+frame of it from that range (:meth:`FrameSource.shown` yields the frames so mapped), so that a
+frame's own brightness does not stretch it.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ import av
 import cv2
 import numpy as np
 
-from .depth import value_range
+from .depth import to_bgr8, value_range
 from .errors import DataError
 from .video import ffmpeg_reason, open_container, video_info
 
@@ -89,6 +90,12 @@ class FrameSource:
                 self.stopped_early = f"decoding stopped at frame {index}: {problem}"
                 return
             yield index, image
+
+    def shown(self) -> Iterator[Frame]:
+        """Iterate as ``(frame_index, picture)``, each frame as drawing takes it: uint8 (H, W, 3)
+        BGR, mapped from :attr:`span` (:func:`seedtrack.data.depth.to_bgr8`)."""
+        for index, image in self:
+            yield index, to_bgr8(image, self.span)
 
     def close(self) -> None:
         """Release the open file, if any; iterating again reopens it."""

@@ -77,7 +77,8 @@ def test_run_on_a_16_bit_stack_detects_as_detect_does_and_every_picture_shows_it
     run = tmp_path / "run"
     assert main(["run", str(stack), "--out", str(run)]) == 0, capsys.readouterr().err
     assert (run / "detections.csv").read_bytes() == (tmp_path / "d.csv").read_bytes()
-    assert main(["render", str(stack), str(run / "tracks.csv"), "--out", str(tmp_path / "r.png"), "--frame", "1"]) == 0
+    assert main(["render", str(stack), str(run / "tracks.csv"), "--out", str(tmp_path / "r.png"), "--frame", "1", "--summary", str(tmp_path / "s.png")]) == 0
+    assert main(["compare", str(stack), str(run / "tracks.csv"), str(run / "tracks.csv"), "--out", str(tmp_path / "c.png"), "--frame", "1"]) == 0
     assert main(["review", str(stack), str(run / "tracks.csv"), "--out", str(tmp_path / "review")]) == 0
     assert main(["detect", str(stack), "--out", str(tmp_path / "p.csv"), "--preview", str(tmp_path / "p.png")]) == 0
     with seedtrack.open_frames(run / "overlay.mp4") as overlay:
@@ -85,11 +86,11 @@ def test_run_on_a_16_bit_stack_detects_as_detect_does_and_every_picture_shows_it
     cache = FrameCache(stack)
     page = cv2.imdecode(np.frombuffer(cache.jpeg(2), np.uint8), cv2.IMREAD_UNCHANGED)
     cache.close()
-    pictures = [first, page] + [cv2.imread(str(name)) for name in (tmp_path / "r.png", tmp_path / "p.png", *sorted((tmp_path / "review").glob("*.png")))]
+    pictures = [first, page] + [cv2.imread(str(name)) for name in (tmp_path / "r.png", tmp_path / "s.png", tmp_path / "c.png", tmp_path / "p.png", *sorted((tmp_path / "review").glob("*.png")))]
     # Much of each picture is the noisy background at its grey level shown from the 12-bit range
     # (from the 16-bit words' whole range it would be crushed 16 times darker) under the drawings.
     level = np.median(at_depth(fields[1], "uint8")[0])
-    assert len(pictures) >= 5 and level >= 20
+    assert len(pictures) >= 8 and level >= 20
     assert [picture.dtype for picture in pictures] == [np.uint8] * len(pictures)
     shares = [float(np.mean(np.abs(picture.astype(int) - level) <= 4)) for picture in pictures]
     # (At least 9% of each picture lies within 4 levels of it; crushed, none would.)

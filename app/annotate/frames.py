@@ -23,7 +23,6 @@ import cv2
 import numpy as np
 
 from seedtrack.data.errors import DataError
-from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import IMAGE_SUFFIXES, open_frames
 from seedtrack.data.video import open_container
 
@@ -63,7 +62,7 @@ class FrameCache:
         self._cache: OrderedDict[int, bytes] = OrderedDict()
         self._lock = threading.Lock()
         source = open_frames(path)
-        self.size, self.fps, self.frame_count, self._span = source.size, source.fps, source.frame_count, source.span
+        self.size, self.fps, self.frame_count = source.size, source.fps, source.frame_count
         source.close()
         target = Path(path)
         # A video can only be decoded forward; image files can be opened at any frame.
@@ -108,12 +107,12 @@ class FrameCache:
         if self._iterator is None or index < self._next or (not self._sequential and index != self._next):
             self._drop_source()
             self._source = open_frames(self.path, start=index)
-            self._iterator = iter(self._source)
+            self._iterator = self._source.shown()
             self._next = index
         for got, image in self._iterator:
             self._next = got + 1
             if got == index:
-                return self._keep(index, to_bgr8(image, self._span))
+                return self._keep(index, image)
             if got > index:
                 break
         problem = self._source.stopped_early

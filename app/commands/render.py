@@ -10,7 +10,6 @@ import numpy as np
 from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_points
 from seedtrack.data.errors import DataError
-from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import FrameSource, open_frames
 from seedtrack.data.trackfile import FORMATS, read_tracks
 from seedtrack.tracking.tracks import Tracks
@@ -204,15 +203,14 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
         view = View.of(source.size, args.crop, args.scale)
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
         if args.summary is not None:
-            _, first = next(iter(open_frames(args.input, start=args.start, end=args.start + 1)))
-            write_png(args.summary, summary_picture(to_bgr8(first, source.span), view, [layer], counted(tracks.n_tracks, "track")))
+            _, first = next(open_frames(args.input, start=args.start, end=args.start + 1).shown())
+            write_png(args.summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
         if kind is None:
             return f"wrote {args.summary}"
         false = None
         if detections is not None:
             check_fits(args.detections, detections["frame"], detections["x"], detections["y"], source, args.input, "detections")
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
-        shown = ((index, to_bgr8(image, source.span)) for index, image in source)
-        frames = annotate_frames(shown, view, [layer], false_detections=false, legend=track_legend(false is not None))
+        frames = annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
     return f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else "")

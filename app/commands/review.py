@@ -6,7 +6,6 @@ import argparse
 from pathlib import Path
 
 from seedtrack.data.atomic import output_folder
-from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import open_frames
 from seedtrack.data.trackfile import FORMATS, read_tracks
 
@@ -47,9 +46,9 @@ def run(args: argparse.Namespace) -> int:
         check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], whole, args.input)
     with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
         with output_folder(args.out), progress_bar(source.frame_count, "review") as bar:
-            for index, image in source:
+            for index, image in source.shown():
                 if index in wanted:
-                    page = draw_review_page(to_bgr8(image, source.span), tracks, index - tracks.first_frame, index)
+                    page = draw_review_page(image, tracks, index - tracks.first_frame, index)
                     write_png(args.out / f"review_{index:06d}.png", page)
                     written += 1
                 bar.update()
