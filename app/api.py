@@ -55,8 +55,10 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
     ----------
     source : path-like or iterable of ndarray
         A video file, image folder, glob pattern or TIFF stack; or frames, each an (H, W) grey
-        or (H, W, 3) BGR array of uint8 (a list, or a generator: frames are read once, except
-        with ``background="temporal"``, which keeps them in memory).
+        or (H, W, 3) BGR array of uint8, uint16 or float (a list, or a generator: frames are
+        read once, except with ``background="temporal"``, which keeps them in memory). A file
+        is read at its own depth (:func:`seedtrack.data.frames.open_frames`), so it gives the
+        detections of its frames as arrays.
     **options
         The options of ``seedtrack detect``: ``detector`` ("blob"), ``polarity`` ("auto",
         decided on the first frame), ``background`` ("local"), ``background_size`` (40 px),

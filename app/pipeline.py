@@ -21,12 +21,13 @@ import numpy as np
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError, warn
+from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.detection.background import temporal_median
-from seedtrack.detection.blobs import BlobOptions, to_gray
+from seedtrack.detection.blobs import BlobOptions
 from seedtrack.detection.choice import DetectorChoice
-from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames
+from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames, grey_levels
 from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.tracks import Tracks
 
@@ -90,7 +91,7 @@ class ClipDetections:
     circle : Circle or None
         The dish found or the circle given, when the region is a circle.
     preview : ndarray of uint8, shape (H, W, 3), or None
-        The frame asked for as a preview, as read.
+        The frame asked for as a preview, as shown (:func:`seedtrack.data.depth.to_bgr8`).
     choice : DetectorChoice
         The detector that ran, its settings and why.
     """
@@ -153,7 +154,7 @@ def detect_clip(
                 nonlocal preview
                 for index, image in read:
                     if index == preview_frame:
-                        preview = image.copy()
+                        preview = to_bgr8(image, source.span).copy()
                     yield index, image
                     bar.update(1)
 
@@ -188,12 +189,12 @@ def _temporal_background(path: Path, settings: DetectionSettings, source: FrameS
         total = min(sample.frame_count, BACKGROUND_FRAMES) if sample.frame_count is not None else None
         with progress_bar(total, "background") as bar:
 
-            def grey_frames():
+            def frames():
                 for _, image in sample:
                     bar.update(1)
-                    yield to_gray(image)
+                    yield image
 
-            return temporal_median(grey_frames(), BACKGROUND_FRAMES)
+            return temporal_median(grey_levels(frames()), BACKGROUND_FRAMES)
 
 
 
@@ -226,16 +227,17 @@ def _render(path: Path, tracks: Tracks, detections: Detections, encoder: VideoEn
         layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
         rows = detections.to_rows()
         false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
-        draw = functools.partial(_annotate_pair, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
+        draw = functools.partial(_annotate_pair, span=source.span, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
         # The next frames decode beside drawing, as in detection.
         with progress_bar(source.frame_count, "rendering") as bar, read_ahead(source) as read:
             encoder.write(threaded_map(draw, read, workers), progress=bar)
 
 
-def _annotate_pair(frame: tuple[int, np.ndarray], **options) -> np.ndarray:
-    """:func:`seedtrack.drawing.annotate` of a frame source's ``(frame_index, image)``."""
+def _annotate_pair(frame: tuple[int, np.ndarray], span: tuple[float, float], **options) -> np.ndarray:
+    """:func:`seedtrack.drawing.annotate` of a frame source's ``(frame_index, image)``, shown
+    from the source's ``span`` (:func:`seedtrack.data.depth.to_bgr8`)."""
     index, image = frame
-    return annotate(image, index, **options)
+    return annotate(to_bgr8(image, span), index, **options)
 
 
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:

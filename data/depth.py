@@ -7,6 +7,7 @@ frame happens to be.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 # Bit depths cameras store in 16-bit words.
@@ -53,3 +54,23 @@ def to_uint8(image: np.ndarray, span: tuple[float, float]) -> np.ndarray:
     low, high = span
     scaled = (np.nan_to_num(image.astype(np.float32), nan=low) - np.float32(low)) * np.float32(255.0 / (high - low))
     return np.clip(scaled + 0.5, 0, 255).astype(np.uint8)
+
+
+def to_bgr8(image: np.ndarray, span: tuple[float, float]) -> np.ndarray:
+    """A frame of any depth as drawing and picture files take it: uint8 (H, W, 3) BGR.
+
+    Values are mapped linearly from ``span`` (the source's :func:`value_range`, so that every
+    frame of a clip is shown on one scale) onto 0..255 (see :func:`to_uint8`); grey becomes three
+    equal channels, an alpha channel is dropped. An 8-bit BGR frame comes back as it is.
+
+    Example
+    -------
+    >>> to_bgr8(np.array([[0, 4095]], np.uint16), (0.0, 4095.0)).tolist()
+    [[[0, 0, 0], [255, 255, 255]]]
+    """
+    image = to_uint8(image, span)
+    if image.ndim == 3 and image.shape[2] == 3:
+        return image
+    if image.ndim == 3 and image.shape[2] == 4:
+        return cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+    return cv2.cvtColor(image.reshape(image.shape[:2]), cv2.COLOR_GRAY2BGR)

@@ -1,11 +1,21 @@
 """Stream frames from a video, an image folder, a glob pattern or a multi-page TIFF.
 
 Every source yields ``(frame_index, image)`` one frame at a time: ``frame_index`` is the 0-based
-index in the original clip, ``image`` a uint8 (height, width, 3) BGR array (OpenCV layout).
-Images deeper than 8 bits (16-bit, float) are scaled to uint8 with one linear map per source,
-from the range of the data (see :func:`seedtrack.data.depth.value_range`: 0..4095 for 12-bit
-data in 16-bit words, 0..1 for float images within it), fixed by the first frame so that
-intensities stay comparable across frames; a frame's own brightness does not stretch it.
+index in the original clip, ``image`` the frame at its own depth, so that a file and the same
+frames handed to :func:`seedtrack.detect` as arrays are detected alike:
+
+- 8-bit data (images, and video of 8 bits a component): a uint8 (height, width, 3) BGR array
+  (OpenCV layout);
+- deeper data (16-bit, float TIFF or PNG): the values as stored, uint16, float32 or float64
+  (other number types as float32), (height, width) for grey, (height, width, 3) BGR for colour;
+  an alpha channel is dropped. Video of more bits a component (10-bit H.264, 16-bit grey FFV1)
+  is decoded to uint16, grey (height, width) or BGR (height, width, 3).
+
+Drawing needs 8 bits: :attr:`FrameSource.span` is the source's range of values, read from its
+first frame (:func:`seedtrack.data.depth.value_range`: 0..4095 for 12-bit data in 16-bit
+words, 0..1 for float images within it), and :func:`seedtrack.data.depth.to_bgr8` maps any
+frame of it from that range (:meth:`FrameSource.shown` yields the frames so mapped), so that a
+frame's own brightness does not stretch it.
 """
 
 from __future__ import annotations
@@ -15,13 +25,13 @@ import glob
 import os
 import re
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Iterator
 
 import av
 import cv2
 import numpy as np
 
-from .depth import to_uint8, value_range
+from .depth import to_bgr8, value_range
 from .errors import DataError
 from .video import ffmpeg_reason, open_container, video_info
 
@@ -47,6 +57,11 @@ class FrameSource:
         Frames in the whole clip if the source vouches for the count (not an estimate), else None.
     size : tuple of int
         (width, height) in pixels.
+    span : tuple of float
+        (low, high): the values that stand for black and white in this clip, as
+        :func:`seedtrack.data.depth.to_bgr8` takes it to show a frame: for images, from the
+        first frame (:func:`seedtrack.data.depth.value_range`; (0.0, 255.0) for 8-bit data);
+        for video, (0.0, 255.0), or (0.0, 65535.0) for video decoded to 16 bits.
     stopped_early : str or None
         After iteration: None, or why it ended before the end of the clip, e.g.
         ``"decoding stopped at frame 57: <reason>"``.
@@ -63,6 +78,7 @@ class FrameSource:
             raise DataError(path, f"start {start} is past the last frame ({reader.length - 1})")
         self.fps = reader.fps
         self.size = reader.size
+        self.span = reader.span
         self.frame_count = _count(start, end, step, reader.length)
         self.clip_length = reader.length if reader.exact else None
         self.stopped_early: str | None = None
@@ -74,6 +90,12 @@ class FrameSource:
                 self.stopped_early = f"decoding stopped at frame {index}: {problem}"
                 return
             yield index, image
+
+    def shown(self) -> Iterator[Frame]:
+        """Iterate as ``(frame_index, picture)``, each frame as drawing takes it: uint8 (H, W, 3)
+        BGR, mapped from :attr:`span` (:func:`seedtrack.data.depth.to_bgr8`)."""
+        for index, image in self:
+            yield index, to_bgr8(image, self.span)
 
     def close(self) -> None:
         """Release the open file, if any; iterating again reopens it."""
@@ -105,13 +127,27 @@ def open_frames(path: str | os.PathLike, *, start: int = 0, end: int | None = No
     Returns
     -------
     FrameSource
-        Iterable of ``(frame_index, image)``; a context manager.
+        Iterable of ``(frame_index, image)``, each image at the data's own depth (see the
+        module's description); a context manager.
 
     Raises
     ------
     DataError
         If the path does not exist, is not a readable video or image, a folder or pattern
         holds no images, or start/end/step make no sense.
+
+    Example
+    -------
+    A 12-bit frame in a 16-bit TIFF comes as it is stored, and is shown from its range:
+
+    >>> import cv2, numpy as np, tempfile
+    >>> from seedtrack.data.depth import to_bgr8
+    >>> path = tempfile.mkdtemp() + "/frame.tif"
+    >>> _ = cv2.imwrite(path, np.array([[0, 4095]], np.uint16))
+    >>> with open_frames(path) as source:
+    ...     (index, image), = source
+    ...     print(index, image.dtype, image.tolist(), source.span, to_bgr8(image, source.span)[0, 1].tolist())
+    0 uint16 [[0, 4095]] (0.0, 4095.0) [255, 255, 255]
     """
     _check_arguments(path, start, end, step)
     return FrameSource(path, _reader_for(path), start, end, step)
@@ -171,12 +207,13 @@ def _natural_key(path: Path) -> tuple:
 
 
 class _Reader(abc.ABC):
-    """A source backend: ``length`` (frames, or None), ``exact``, ``fps``, ``size`` and ``read``."""
+    """A source backend: ``length`` (frames, or None), ``exact``, ``fps``, ``size``, ``span`` and ``read``."""
 
     length: int | None
     exact: bool = True
     fps: float
     size: tuple[int, int]
+    span: tuple[float, float] = (0.0, 255.0)
 
     @abc.abstractmethod
     def read(self, start: int, stop: int | None, step: int) -> Iterator[tuple[int, np.ndarray | None, str | None]]:
@@ -191,8 +228,12 @@ class _VideoReader(_Reader):
     def __init__(self, path: Path) -> None:
         self.path = path
         self._container = open_container(path)
-        info = video_info(self._container.streams.video[0])
+        stream = self._container.streams.video[0]
+        info = video_info(stream)
         self.length, self.exact, self.fps, self.size = info.frame_count, info.exact, info.fps, info.size
+        self._format = _decoded_format(stream.format)
+        # The decoder scales deeper video to the whole 16 bits, as it scales it to 8 for bgr24.
+        self.span = (0.0, 255.0) if self._format == "bgr24" else (0.0, 65535.0)
         self._used = False
 
     def read(self, start, stop, step):
@@ -211,7 +252,7 @@ class _VideoReader(_Reader):
                 if stop is not None and index >= stop:
                     return
                 if index >= start and (index - start) % step == 0:
-                    yield index, frame.to_ndarray(format="bgr24"), None
+                    yield index, frame.to_ndarray(format=self._format), None
                 index += 1
         except av.FFmpegError as error:
             if index == 0:
@@ -227,6 +268,15 @@ class _VideoReader(_Reader):
             self._container = None
 
 
+def _decoded_format(video_format) -> str:
+    """The pixel format frames of a video in ``video_format`` are decoded to: 8-bit BGR, or for
+    more bits a component 16-bit grey or BGR, so that 10- and 12-bit video keeps its depth."""
+    components = list(video_format.components) if video_format is not None else []
+    if not components or max(component.bits for component in components) <= 8:
+        return "bgr24"
+    return "gray16le" if len(components) == 1 else "bgr48le"
+
+
 class _ImageListReader(_Reader):
     def __init__(self, path, files: list[Path]) -> None:
         self.path = path
@@ -234,19 +284,20 @@ class _ImageListReader(_Reader):
         first = _read_image(files[0])
         if first is None:
             raise DataError(files[0], "not an image this program can read")
-        self._to_uint8 = _scaler(first)
+        first = _as_frame(first)
+        self.span, self._dtype = value_range(first), first.dtype
         self.length = len(files)
         self.fps = DEFAULT_IMAGE_FPS
         self.size = (first.shape[1], first.shape[0])
 
     def read(self, start, stop, step):
         for index in range(start, len(self._files) if stop is None else stop, step):
-            image = _read_image(self._files[index])
-            problem = _image_problem(image, self.size, self._files[index].name)
+            image = _as_frame(_read_image(self._files[index]))
+            problem = _image_problem(image, self.size, self._dtype, self._files[index].name)
             if problem:
                 yield index, None, problem
                 return
-            yield index, self._to_uint8(image), None
+            yield index, image, None
 
 
 class _TiffReader(_Reader):
@@ -261,7 +312,8 @@ class _TiffReader(_Reader):
         first = self._page(0) if self.length > 0 else None
         if first is None:
             raise DataError(path, "not a TIFF this program can read")
-        self._to_uint8 = _scaler(first)
+        first = _as_frame(first)
+        self.span, self._dtype = value_range(first), first.dtype
         self.fps = DEFAULT_IMAGE_FPS
         self.size = (first.shape[1], first.shape[0])
 
@@ -271,33 +323,51 @@ class _TiffReader(_Reader):
 
     def read(self, start, stop, step):
         for index in range(start, self.length if stop is None else stop, step):
-            image = self._page(index)
-            problem = _image_problem(image, self.size, f"page {index}")
+            image = _as_frame(self._page(index))
+            problem = _image_problem(image, self.size, self._dtype, f"page {index}")
             if problem:
                 yield index, None, problem
                 return
-            yield index, self._to_uint8(image), None
+            yield index, image, None
 
 
 def _read_image(path: Path) -> np.ndarray | None:
     return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
 
 
-def _image_problem(image: np.ndarray | None, size: tuple[int, int], name: str) -> str | None:
+def _image_problem(image: np.ndarray | None, size: tuple[int, int], dtype: np.dtype, name: str) -> str | None:
     if image is None:
         return f"cannot read {name}"
     if (image.shape[1], image.shape[0]) != size:
         return f"{name} is {image.shape[1]}x{image.shape[0]}, the first frame {size[0]}x{size[1]}"
+    if image.dtype != dtype:
+        # One range holds for the whole clip; data of another depth would be measured on it.
+        return f"{name} holds {image.dtype} data, the first frame {dtype}"
     return None
 
 
-def _scaler(first: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """A function mapping any frame of this source to uint8 BGR, fixed by the first frame's data range."""
-    span = value_range(first)
-    return lambda image: _to_bgr(to_uint8(image, span))
+# Number types the detectors take as they are; others become float32.
+_DEEP_TYPES = (np.dtype(np.uint16), np.dtype(np.float32), np.dtype(np.float64))
 
 
-def _to_bgr(image: np.ndarray) -> np.ndarray:
+def _as_frame(image: np.ndarray | None) -> np.ndarray | None:
+    """An image as read (None: unreadable), as a source yields it (see the module's description)."""
+    if image is None or image.dtype == np.uint8:
+        return _to_bgr(image)
+    if image.dtype not in _DEEP_TYPES:
+        image = image.astype(np.float32)
+    # Deeper grey stays one channel: three would triple a 16-bit stack's bytes, and the grey
+    # weights applied to float channels need not give back the values stored.
+    if image.ndim == 3 and image.shape[2] == 1:
+        return image[..., 0]
+    if image.ndim == 3 and image.shape[2] == 4:
+        return np.ascontiguousarray(image[..., :3])
+    return image
+
+
+def _to_bgr(image: np.ndarray | None) -> np.ndarray | None:
+    if image is None:
+        return None
     if image.ndim == 2:
         return cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
     if image.shape[2] == 4:

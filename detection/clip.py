@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, replace
-from typing import Callable, Iterable, Sequence
+from typing import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -41,13 +41,30 @@ def temporal_background(frames: Sequence[np.ndarray]) -> np.ndarray:
 
     Parameters
     ----------
-    frames : sequence of ndarray of uint8, each (H, W) or (H, W, 3) BGR
+    frames : sequence of ndarray, each (H, W) or (H, W, 3) BGR
+        uint8, or deeper: mapped to 8 bits as :class:`ClipDetector` maps them (see
+        :func:`grey_levels`).
 
     Returns
     -------
     ndarray of uint8, shape (H, W)
     """
-    return temporal_median((to_gray(f) for f in frames[:: background_spacing(len(frames))]), BACKGROUND_FRAMES)
+    return temporal_median(grey_levels(frames[:: background_spacing(len(frames))]), BACKGROUND_FRAMES)
+
+
+def grey_levels(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """The uint8 (H, W) grey levels of each frame, deeper data mapped from the range of the first
+    frame's (:func:`seedtrack.data.depth.value_range`), as :class:`ClipDetector` maps them.
+
+    Example
+    -------
+    >>> [g.tolist() for g in grey_levels([np.array([[0, 4095]], np.uint16), np.array([[0, 5000]], np.uint16)])]
+    [[[0, 255]], [[0, 255]]]
+    """
+    span = None
+    for image in frames:
+        span = value_range(image) if span is None else span
+        yield to_gray(image if image.dtype == np.uint8 else to_uint8(image, span))
 
 
 class ClipDetector:
@@ -261,4 +278,4 @@ def detect_frames(
     return Detections.gathered(indices, itertools.chain(columns, map_frames(detector.detect, rest())))
 
 
-__all__ = ["DETECTORS", "BACKGROUND_FRAMES", "ClipDetector", "Detections", "background_spacing", "detect_frames", "temporal_background"]
+__all__ = ["DETECTORS", "BACKGROUND_FRAMES", "ClipDetector", "Detections", "background_spacing", "detect_frames", "grey_levels", "temporal_background"]

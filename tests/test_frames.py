@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from seedtrack.data.errors import DataError
+from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import open_frames
 from seedtrack.data.video import write_video
 
@@ -130,7 +131,7 @@ def test_colour_and_alpha_images_become_bgr(tmp_path):
     assert tuple(image[0, 0]) == (200, 0, 50)
 
 
-def test_sixteen_bit_images_are_scaled_by_the_range_of_their_data(tmp_path):
+def test_sixteen_bit_images_come_as_stored_and_are_shown_by_the_range_of_their_data(tmp_path):
     folder = tmp_path / "frames"
     folder.mkdir()
     # 12-bit data (brightest 3000 < 4096) in 16-bit words: 0..4095 is black to white, whatever
@@ -138,12 +139,46 @@ def test_sixteen_bit_images_are_scaled_by_the_range_of_their_data(tmp_path):
     first = np.full((20, 30), 1000, np.uint16)
     first[0, :] = 3000
     cv2.imwrite(str(folder / "f1.tif"), first)
-    cv2.imwrite(str(folder / "f2.tif"), np.full((20, 30), 2000, np.uint16))
+    cv2.imwrite(str(folder / "f2.png"), np.full((20, 30), 2000, np.uint16))
     cv2.imwrite(str(folder / "f3.tif"), np.full((20, 30), 5000, np.uint16))
-    images = [image for _, image in open_frames(folder)]
-    assert images[0][0, 0, 0] == round(3000 * 255 / 4095) and images[0][5, 5, 0] == round(1000 * 255 / 4095)
-    assert images[1][5, 5, 0] == round(2000 * 255 / 4095)
-    assert images[2][5, 5, 0] == 255
+    source = open_frames(folder)
+    images = [image for _, image in source]
+    assert [(image.dtype, image.shape) for image in images] == [(np.uint16, (20, 30))] * 3
+    np.testing.assert_array_equal(images[0], first)
+    assert source.span == (0.0, 4095.0)
+    shown = [to_bgr8(image, source.span) for image in images]
+    assert all(picture.dtype == np.uint8 and picture.shape == (20, 30, 3) for picture in shown)
+    assert shown[0][0, 0, 0] == round(3000 * 255 / 4095) and shown[0][5, 5, 0] == round(1000 * 255 / 4095)
+    assert shown[1][5, 5, 0] == round(2000 * 255 / 4095)
+    assert shown[2][5, 5, 0] == 255
+
+
+def test_float_and_deep_colour_images_keep_their_values_and_lose_only_alpha(tmp_path):
+    stack = tmp_path / "float.tif"
+    pages = [np.linspace(0, value, 600, dtype=np.float32).reshape(20, 30) for value in (0.5, 1.0)]
+    assert cv2.imwritemulti(str(stack), pages)
+    source = open_frames(stack)
+    read = [image for _, image in source]
+    assert source.span == (0.0, 1.0)
+    for got, written in zip(read, pages):
+        assert got.dtype == np.float32
+        np.testing.assert_array_equal(got, written)
+    bgra = np.zeros((20, 30, 4), np.uint16)
+    bgra[..., 0], bgra[..., 2], bgra[..., 3] = 40000, 300, 65535
+    cv2.imwrite(str(tmp_path / "colour.png"), bgra)
+    (_, image), = open_frames(tmp_path / "colour.png")
+    assert image.dtype == np.uint16 and image.shape == (20, 30, 3)
+    assert tuple(image[0, 0]) == (40000, 0, 300)
+
+
+def test_a_frame_of_another_depth_stops_the_clip_there(tmp_path):
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    cv2.imwrite(str(folder / "1.png"), np.full((20, 30), 3000, np.uint16))
+    cv2.imwrite(str(folder / "2.png"), np.full((20, 30), 30, np.uint8))
+    source = open_frames(folder)
+    assert [index for index, _ in source] == [0]
+    assert source.stopped_early == "decoding stopped at frame 1: 2.png holds uint8 data, the first frame uint16"
 
 
 def test_multi_page_tiff_is_read_page_by_page(tmp_path):

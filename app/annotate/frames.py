@@ -107,7 +107,7 @@ class FrameCache:
         if self._iterator is None or index < self._next or (not self._sequential and index != self._next):
             self._drop_source()
             self._source = open_frames(self.path, start=index)
-            self._iterator = iter(self._source)
+            self._iterator = self._source.shown()
             self._next = index
         for got, image in self._iterator:
             self._next = got + 1

@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         legend_b = ("line", COMPARE_B_BGR, f"B: {_short_name(args.b, args.a)}")
         warning = ("line", WARNING_BGR, "link the other lacks")
         if args.overlay:
-            frames = ((index, annotate(image, index, view, [layer_a, layer_b], legend=[legend_a, legend_b, warning])) for index, image in source)
+            frames = ((index, annotate(image, index, view, [layer_a, layer_b], legend=[legend_a, legend_b, warning])) for index, image in source.shown())
         else:
             frames = _side_by_side(source, view, (layer_a, [legend_a, warning]), (layer_b, [legend_b, warning]))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
@@ -105,6 +105,6 @@ def _links(tracks: Tracks) -> int:
 def _side_by_side(source, view: View, left, right):
     """Yield ``(frame_index, A panel | gap | B panel)`` for every frame of ``source``."""
     gap = np.zeros((view.size[1], max(2, view.size[0] // 200), 3), np.uint8)
-    for index, image in source:
+    for index, image in source.shown():
         panels = [annotate(image, index, view, [layer], legend=legend, title=f"{name} ") for (layer, legend), name in ((left, "A"), (right, "B"))]
         yield index, np.hstack([panels[0], gap, panels[1]])

@@ -203,7 +203,7 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
         view = View.of(source.size, args.crop, args.scale)
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
         if args.summary is not None:
-            _, first = next(iter(open_frames(args.input, start=args.start, end=args.start + 1)))
+            _, first = next(open_frames(args.input, start=args.start, end=args.start + 1).shown())
             write_png(args.summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
         if kind is None:
             return f"wrote {args.summary}"
@@ -211,6 +211,6 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
         if detections is not None:
             check_fits(args.detections, detections["frame"], detections["x"], detections["y"], source, args.input, "detections")
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
-        frames = annotate_frames(source, view, [layer], false_detections=false, legend=track_legend(false is not None))
+        frames = annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None))
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
     return f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else "")

@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
         check_fits(args.tracks, rows["frame"], rows["x"], rows["y"], whole, args.input)
     with open_frames(args.input, start=tracks.first_frame, end=last + 1) as source:
         with output_folder(args.out), progress_bar(source.frame_count, "review") as bar:
-            for index, image in source:
+            for index, image in source.shown():
                 if index in wanted:
                     page = draw_review_page(image, tracks, index - tracks.first_frame, index)
                     write_png(args.out / f"review_{index:06d}.png", page)
