@@ -64,7 +64,9 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
         decided on the first frame), ``background`` ("local"), ``background_size`` (40 px),
         ``threshold`` ("otsu", "adaptive" or grey levels), ``min_area`` (4 px), ``max_area``
         (1% of the frame), ``roi`` ("auto", "none", (x, y, r) in pixels, or a mask image file),
-        ``split`` (True), ``start`` (0), ``end`` (None: the end), ``step`` (1).
+        ``split`` (True), ``start`` (0), ``end`` (None: the end), ``step`` (1), ``diameter`` and
+        ``min_mass`` (the spot detector's diameter, pixels, and least mass, integrated brightness
+        in grey levels times pixels; None: set from the first frame).
 
     Returns
     -------
@@ -332,7 +334,7 @@ def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) ->
     roi = settings.roi
     if isinstance(roi, Path):
         roi = read_mask(roi, (first[1].shape[1], first[1].shape[0]))
-    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter))
+    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter, settings.min_mass))
 
 
 def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer: tuple[str, ...]) -> dict[str, np.ndarray]:

@@ -66,6 +66,9 @@ class DetectionSettings:
         clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
     start, end, step : int
         0-based frames processed: ``range(start, end, step)``, end None for the clip's end.
+    min_mass : float or None
+        The spot detector's least mass (integrated brightness, data units times pixels, as the
+        ``detector:`` line prints it); None sets it from the first frame's noise.
     """
 
     options: BlobOptions = BlobOptions()
@@ -75,6 +78,7 @@ class DetectionSettings:
     start: int = 0
     end: int | None = None
     step: int = 1
+    min_mass: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,7 +150,7 @@ def detect_clip(
             span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter)
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass)
         preview = None
         with progress_bar(source.frame_count, "detecting") as bar:
 
@@ -167,10 +171,32 @@ def detect_clip(
         if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
-            say(f"detector: {detector.choice.reason}")
+            say(f"detector: {detector.choice.reason}{_unused_options(settings, detector.choice)}")
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(detections.frame_indices.size, 'frame')} before it", file=sys.stderr)
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
+
+
+def _unused_options(settings: DetectionSettings, choice: DetectorChoice) -> str:
+    """What to add to the ``detector:`` line when options were given for the detector that did
+    not run, so that they are never ignored silently ("" when there are none)."""
+    defaults = BlobOptions()
+    if choice.spots is None:
+        return "; --min-mass applies to the spot detector only (not used)" if settings.min_mass is not None else ""
+    given = settings.options
+    unused = [
+        option
+        for option, differs in (
+            ("--threshold", given.threshold != defaults.threshold),
+            ("--min-area", given.min_area_px != defaults.min_area_px),
+            ("--max-area", given.max_area_px != defaults.max_area_px),
+            ("--no-split", given.split != defaults.split),
+        )
+        if differs
+    ]
+    if not unused:
+        return ""
+    return f"; {', '.join(unused)} {'apply' if len(unused) > 1 else 'applies'} to the blob detector only (not used)"
 
 
 def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> str | Circle | np.ndarray:

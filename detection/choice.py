@@ -10,7 +10,7 @@ as the motion decision is.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,7 +42,15 @@ class DetectorChoice:
     spots: SpotSettings | None = None
 
 
-def choose_detector(gray: np.ndarray, polarity: str, *, detector: str = "auto", diameter: int | None = None, roi: np.ndarray | None = None) -> DetectorChoice:
+def choose_detector(
+    gray: np.ndarray,
+    polarity: str,
+    *,
+    detector: str = "auto",
+    diameter: int | None = None,
+    roi: np.ndarray | None = None,
+    min_mass: float | None = None,
+) -> DetectorChoice:
     """The detector for a clip, from its first frame.
 
     Parameters
@@ -57,6 +65,10 @@ def choose_detector(gray: np.ndarray, polarity: str, *, detector: str = "auto", 
         The spot diameter, pixels, odd; estimated from the frame when not given.
     roi : ndarray of uint8, shape (H, W), optional
         Nonzero where to look.
+    min_mass : float, optional
+        The spot detector's least mass (integrated brightness: the band-passed frame summed over
+        a spot's disc, data units times pixels, as :func:`describe` prints it), taken instead of
+        the one set from the measured noise.
 
     Returns
     -------
@@ -75,6 +87,8 @@ def choose_detector(gray: np.ndarray, polarity: str, *, detector: str = "auto", 
         return DetectorChoice("blob", "blob detector, as asked")
     shape = spot_shape(gray, polarity, roi)
     settings = fit_spot_settings(gray, polarity, diameter=diameter or shape.diameter, roi=roi)
+    if min_mass is not None:
+        settings = replace(settings, min_mass=float(min_mass))
     if detector == "spot":
         return DetectorChoice("spot", f"spot detector, as asked; {describe(settings)}", settings)
     if shape.diameter > _LARGEST_SPOT_PX:

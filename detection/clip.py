@@ -79,6 +79,10 @@ class ClipDetector:
         (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame.
     diameter : int, optional
         Spot diameter, pixels, odd; measured on the first frame when not given.
+    min_mass : float, optional
+        The spot detector's least mass (integrated brightness, data units times pixels, as
+        :func:`seedtrack.detection.choice.describe` prints it); set from the first frame's
+        noise when not given.
     roi : "auto", "none", Circle or ndarray of uint8 (H, W)
         "auto": the dish found on the first frame, or the whole frame if there is none clearly;
         "none": the whole frame; a circle in pixels; a mask, nonzero inside.
@@ -117,16 +121,19 @@ class ClipDetector:
         roi: str | Circle | np.ndarray = "auto",
         background: np.ndarray | None = None,
         diameter: int | None = None,
+        min_mass: float | None = None,
     ) -> None:
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+        if min_mass is not None and not (math.isfinite(min_mass) and min_mass >= 0):
+            raise ValueError(f"min_mass must be finite and >= 0, got {min_mass:g}")
         if isinstance(roi, str) and roi not in ("auto", "none"):
             raise ValueError(f"roi must be 'auto', 'none', a Circle or a mask, got {roi!r}")
         self.options = options
         self.circle = roi if isinstance(roi, Circle) else None
         self.roi = roi if isinstance(roi, np.ndarray) else None
         self._pending_roi = roi
-        self._detector, self._diameter = detector, diameter
+        self._detector, self._diameter, self._min_mass = detector, diameter, min_mass
         self.choice: DetectorChoice | None = None
         self._background = background
         self._first = True
@@ -165,7 +172,9 @@ class ClipDetector:
         if self.options.polarity == "auto":
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
         scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background
-        self.choice = choose_detector(scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi)
+        self.choice = choose_detector(
+            scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi, min_mass=self._min_mass
+        )
 
 
 # Frames whose columns are joined into one array each at a time while a clip is detected: a

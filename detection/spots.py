@@ -74,6 +74,13 @@ _SIZE_SIGMAS = np.array([0.8, 1.0, 1.25, 1.6, 2.0, 2.5, 3.2, 4.0, 5.0])
 _SIZE_VOTERS = 200
 # Median absolute deviation of a normal distribution, in standard deviations.
 _MAD_TO_SIGMA = 1.4826
+# Spots stand apart from the noise's maxima when the sorted masses of the candidates jump by
+# this factor (the heaviest noise maxima of a frame lie about 1.1 apart, spots of one kind 1.2).
+_VALLEY_RATIO = 3.0
+# The heaviest noise maxima of a frame lie at most this many times further above their median
+# than white noise's once-per-10^5-pixels maxima lie above theirs (a small frame's heaviest are
+# rarer, compression's a little heavier: 1.0 to 1.1 times on the frames it was set on).
+_VALLEY_REACH = 2.0
 
 
 @dataclass(frozen=True)
@@ -307,21 +314,43 @@ def _unit_noise(shape: tuple[int, int], skewness: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=None)
-def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, float, float]:
-    """(floor, least mass, tail) for white noise of unit standard deviation and this skewness at
-    this diameter.
+def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, float, float, float]:
+    """(floor, least mass, tail, median mass) for white noise of unit standard deviation and this
+    skewness at this diameter.
 
     The floor is the band-passed noise's standard deviation; the least mass is the mass that
     the noise's own local maxima exceed once per 10^5 pixels, found on a frame of generated
     noise (fixed seed, so always the same); the tail is how much more mass they exceed ten
-    times more rarely (measured between once per 10^4 and once per 10^5 pixels).
+    times more rarely (measured between once per 10^4 and once per 10^5 pixels); the median
+    mass is their median.
     """
     noise = _unit_noise((_CALIBRATION_SIZE, _CALIBRATION_SIZE), skewness)
     band = band_pass(noise, diameter)
     floor = float(np.std(band[diameter:-diameter, diameter:-diameter]))
     masses = np.sort(detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor))["mass"])[::-1]
     least = float(masses[int(_FALSE_SPOTS_PER_PIXEL * noise.size)])
-    return floor, least, least - float(masses[int(10 * _FALSE_SPOTS_PER_PIXEL * noise.size)])
+    return floor, least, least - float(masses[int(10 * _FALSE_SPOTS_PER_PIXEL * noise.size)]), float(np.median(masses))
+
+
+def _valley(masses: np.ndarray, reach: float) -> float:
+    """The least mass in the valley between the noise's maxima and the spots, 0 when there is none.
+
+    Above the median candidate (the noise's maxima are most of the candidates) the sorted masses
+    are looked through for the first gap of :data:`_VALLEY_RATIO` times: the spots form a mode of
+    their own above it when the mass below it (the heaviest of the noise) lies no more than
+    ``reach`` times the median above the median, as white noise's heaviest do. The valley's
+    middle on a log scale is as far from either side as can be.
+    """
+    if masses.size < 2:
+        return 0.0
+    masses = np.sort(masses)
+    median = float(np.median(masses))
+    upper = masses[masses >= median]
+    ratio = upper[1:] / np.maximum(upper[:-1], np.finfo(np.float64).tiny)
+    gaps = np.flatnonzero(ratio >= _VALLEY_RATIO)
+    if gaps.size == 0 or upper[gaps[0]] > reach * median:
+        return 0.0
+    return float(np.sqrt(upper[gaps[0]] * upper[gaps[0] + 1]))
 
 
 @dataclass(frozen=True)
@@ -422,7 +451,11 @@ def fit_spot_settings(
     spot per 10^5 pixels (about 3 in a 640 x 512 frame), or one per hundred of the spots this
     frame holds when that is rarer (a few spots in a small frame, as in TrackMate's FakeTracks:
     the noise's mass tail is continued at the slope it has between once per 10^4 and once per
-    10^5 pixels, which errs high for tails as light as or lighter than exponential).
+    10^5 pixels, which errs high for tails as light as or lighter than exponential). Where the
+    masses of the frame's candidates show the spots as a mode of their own above the noise's
+    maxima (a jump of 3 times in the sorted masses, just above a noise-like tail), the least mass
+    is no lower than the middle of that valley: compression takes off the fine noise the level is
+    read from, and its blocks make maxima far heavier than that level's noise would.
 
     Example
     -------
@@ -435,14 +468,20 @@ def fit_spot_settings(
     sigma = pixel_noise(gray, roi)
     strongest = max(sigma, _noisiest_level(gray, roi))
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
-    floor, mass, tail = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
+    floor, mass, tail, median = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
     settings = SpotSettings(diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma)
     pixels = int(np.count_nonzero(roi)) if roi is not None else np.asarray(gray).shape[0] * np.asarray(gray).shape[1]
-    spots = len(detect_spots(gray, settings, roi=roi)["x"])
+    # Every candidate's mass: a spot's is decided by heavier ones only, so those above the least
+    # mass are the spots the least mass finds.
+    candidates = detect_spots(gray, replace(settings, min_mass=0.0), roi=roi)["mass"]
+    spots = int(np.count_nonzero(candidates > settings.min_mass))
     allowed = _FALSE_SHARE * spots / max(pixels, 1)
     if 0 < allowed < _FALSE_SPOTS_PER_PIXEL:
         settings = replace(settings, min_mass=float((mass + tail * np.log10(_FALSE_SPOTS_PER_PIXEL / allowed)) * strongest))
-    return settings
+    # Compression takes off the fine noise the level is read from and leaves blocks and blotches
+    # that make heavier maxima than that level's noise would: where the candidates' masses show
+    # the spots apart from the noise, the least mass is never below the valley between them.
+    return replace(settings, min_mass=max(settings.min_mass, _valley(candidates, _VALLEY_REACH * mass / median)))
 
 
 def detect_spots(

@@ -7,6 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
+import seedtrack as seedtrack_api
 from seedtrack.cli import main
 from seedtrack.commands.detect import preview_caption
 from seedtrack.detection.choice import choose_detector
@@ -96,6 +97,8 @@ def test_mask_image_limits_the_search(dish, tmp_path):
         (["--roi", "{folder}/missing.png"], "missing.png: no such mask image file"),
         (["--detector", "spot", "--threshold", "adaptive"], "adaptive works with --detector blob only"),
         (["--diameter", "4"], "--diameter must be an odd number of pixels >= 3, got 4"),
+        (["--min-mass", "-1"], "--min-mass must be a finite number >= 0, got -1"),
+        (["--min-mass", "inf"], "--min-mass must be a finite number >= 0, got inf"),
         (["--preview", "{folder}/p.png", "--preview-frame", "99"], "preview frame 99 is not among the frames processed (0..3)"),
         (["--preview", "{folder}/p.txt"], "name an image file"),
     ],
@@ -159,16 +162,22 @@ def test_temporal_background_ignores_what_never_moves(tmp_path):
     np.testing.assert_allclose(table["x"], 10 + 12 * np.arange(9), atol=0.1)
 
 
-def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, capsys):
-    # Round bright spots: the spot detector, whose diameter and least mass the caption gives.
+def write_spot_frames(folder, peaks=(90.0,) * 15, centres=None):
+    """Two PNG frames of round bright spots of these peaks (grey levels) on 20, noise of 2, at
+    these centres (x, y), pixels (random ones by default), moving right 1 px a frame."""
     rng = np.random.default_rng(4)
     rows, columns = np.mgrid[0:120, 0:160]
-    folder = tmp_path / "frames"
     folder.mkdir()
-    centres = rng.uniform(12, 108, (15, 2))
+    centres = rng.uniform(12, 108, (len(peaks), 2)) if centres is None else centres
     for k in range(2):
-        image = 20 + sum(90 * np.exp(-((columns - x - k) ** 2 + (rows - y) ** 2) / 4.5) for x, y in centres)
+        image = 20 + sum(peak * np.exp(-((columns - x - k) ** 2 + (rows - y) ** 2) / 4.5) for peak, (x, y) in zip(peaks, centres))
         cv2.imwrite(str(folder / f"{k}.png"), np.clip(image + rng.normal(0, 2, image.shape), 0, 255).astype(np.uint8))
+    return folder
+
+
+def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, capsys):
+    # Round bright spots: the spot detector, whose diameter and least mass the caption gives.
+    folder = write_spot_frames(tmp_path / "frames")
     assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), "--preview", str(tmp_path / "p.png")]) == 0
     first = capsys.readouterr().out.splitlines()[0]
     assert first.startswith("detector: small round spots") and "diameter 11 px" in first
@@ -178,3 +187,34 @@ def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, c
         "blob detector: threshold otsu, area 4 px and up"
     )
     assert cv2.imread(str(tmp_path / "p.png")) is not None
+
+
+def test_min_mass_overrides_the_least_mass_in_the_command_and_the_api(tmp_path, capsys):
+    # Five faint spots (peak 25) among ten bright ones (peak 90), 25 px apart: masses (band-passed,
+    # over the disc) of about 190 and 690.
+    grid = np.column_stack((np.tile(np.arange(5) * 25 + 25.0, 3), np.repeat(np.arange(3) * 25 + 30.0, 5)))
+    folder = write_spot_frames(tmp_path / "frames", peaks=(90.0,) * 10 + (25.0,) * 5, centres=grid)
+    counts = {}
+    for mass in (None, 400.0, 1e6):
+        options = [] if mass is None else ["--min-mass", f"{mass:g}"]
+        assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), *options]) == 0
+        first = capsys.readouterr().out.splitlines()[0]
+        assert mass is None or f"least mass {mass:.3g} " in first
+        counts[mass] = np.bincount(read_table(tmp_path / "d.csv")["frame"].astype(int), minlength=2).tolist()
+        if mass is not None:
+            frames = [cv2.imread(str(folder / f"{k}.png"), cv2.IMREAD_GRAYSCALE) for k in range(2)]
+            assert seedtrack_api.detect(frames, min_mass=mass).groupby("frame").size().reindex([0, 1], fill_value=0).tolist() == counts[mass]
+    assert counts == {None: [15, 15], 400.0: [10, 10], 1e6: [0, 0]}
+
+
+def test_options_of_the_detector_that_did_not_run_are_said_on_the_first_line(tmp_path, capsys):
+    folder = write_spot_frames(tmp_path / "frames")
+    for options, said in (
+        (["--threshold", "30", "--min-area", "8"], "; --threshold, --min-area apply to the blob detector only (not used)"),
+        (["--detector", "spot", "--no-split"], "; --no-split applies to the blob detector only (not used)"),
+        (["--detector", "blob", "--min-mass", "500"], "; --min-mass applies to the spot detector only (not used)"),
+        (["--detector", "spot"], ""),
+    ):
+        assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), *options]) == 0
+        first = capsys.readouterr().out.splitlines()[0]
+        assert first.startswith("detector: ") and ("not used" not in first if not said else first.endswith(said)), (options, first)

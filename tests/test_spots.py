@@ -1,5 +1,6 @@
 """The spot detector (Crocker and Grier) and the detector choice, on small exact scenes."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -10,7 +11,7 @@ from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.detection.blobs import to_gray
 from seedtrack.detection.choice import choose_detector
 from seedtrack.detection.roi import dish_mask
-from seedtrack.detection.spots import SpotSettings, detect_spots, fit_spot_settings, pixel_noise, spot_shape
+from seedtrack.detection.spots import SpotSettings, _valley, detect_spots, fit_spot_settings, pixel_noise, spot_shape
 from seedtrack.tracking.metrics import match_frame
 
 ROWS, COLUMNS = np.mgrid[0:80, 0:100].astype(np.float32)
@@ -126,3 +127,35 @@ def test_the_api_finds_spots_in_16_bit_and_float_frames_on_their_own_values():
     rows, _ = match_frame(deep[["x", "y"]].to_numpy(), field.xy, 1.0)
     assert len(deep) == len(floating) and len(rows) == 10
     np.testing.assert_allclose(deep["x"], floating["x"], atol=1e-3)
+
+
+def test_jpeg_blocks_do_not_pass_for_spots():
+    # Bright spots on a dark frame of little noise (about 1.2 grey levels), saved as JPEG of
+    # quality 75 or 50: the fine noise is gone (the pixel noise reads a third of it or less) and
+    # the blocks make maxima heavier than noise of that level would. The least mass set from the
+    # pixel noise alone let about 30 false spots a frame through (94 in the first at quality 75).
+    spec = SparseSpotSpec(
+        width=320, height=200, frames=3, spots=12, sigma_range=(1.5, 2.5), peak_range=(60.0, 120.0),
+        background=(1.0, 1.0), gain=1.0, read_noise=0.5, offset=10.0, random_seed=7,
+    )
+    clip = make_sparse_spots(spec)
+    for quality in (75, 50):
+        jpeg = [cv2.imdecode(cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, quality])[1], cv2.IMREAD_GRAYSCALE) for frame in clip.frames]
+        assert pixel_noise(jpeg[0]) < 0.5 * pixel_noise(clip.frames[0])
+        settings = fit_spot_settings(jpeg[0], "light")
+        found = [detect_spots(frame, settings) for frame in jpeg]
+        matched = sum(len(match_frame(np.column_stack((t["x"], t["y"])), xy, 2.0)[0]) for t, xy in zip(found, clip.xy))
+        assert matched >= 35 and sum(len(t["x"]) for t in found) <= matched + 1, quality
+
+
+def test_the_valley_between_noise_and_spots_is_taken_only_where_there_is_one():
+    rng = np.random.default_rng(0)
+    noise = rng.gamma(4.0, 3.0, 500)
+    # Spots far heavier than the noise's maxima: the least mass lies between them.
+    valley = _valley(np.concatenate([noise, rng.uniform(600, 900, 12)]), 4.0)
+    assert noise.max() < valley < 600
+    # Masses that run on from the noise (faint spots among it, beads in and out of focus): none.
+    assert _valley(np.concatenate([noise, np.geomspace(noise.max(), 900, 40)]), 4.0) == 0
+    # A gap far above the noise's median (faint spots running on from the noise, then bright
+    # ones) is no valley of noise: the faint ones are kept.
+    assert _valley(np.concatenate([noise, np.geomspace(noise.max(), 300, 100), rng.uniform(2000, 2500, 10)]), 4.0) == 0

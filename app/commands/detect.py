@@ -55,6 +55,15 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
         help="spot diameter, pixels, odd, a little larger than a spot (default: measured on the first frame)",
     )
     group.add_argument(
+        "--min-mass",
+        type=float,
+        default=None,
+        metavar="M",
+        help="spot detector: least integrated brightness of a spot (the band-passed frame summed over its "
+        "disc, grey levels times pixels; the 'least mass' the detector line and --preview print) (default: "
+        "set from the noise measured on the first frame)",
+    )
+    group.add_argument(
         "--polarity",
         choices=POLARITIES,
         default=defaults.polarity,
@@ -121,6 +130,8 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
         raise UsageError("--threshold adaptive works with --detector blob only")
     if args.diameter is not None and (args.diameter < 3 or args.diameter % 2 == 0):
         raise UsageError(f"--diameter must be an odd number of pixels >= 3, got {args.diameter}")
+    if args.min_mass is not None and not (np.isfinite(args.min_mass) and args.min_mass >= 0):
+        raise UsageError(f"--min-mass must be a finite number >= 0, got {args.min_mass:g}")
     try:
         options = BlobOptions(
             polarity=args.polarity,
@@ -139,7 +150,7 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             raise UsageError(f"--{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}")
     if args.end is not None and args.end <= args.start:
         raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
-    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step)
+    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step, args.min_mass)
 
 
 def _roi(text: str) -> str | Circle | Path:
