@@ -54,17 +54,17 @@ FIRST_LINK_SCALE = 2.0
 # (mean 0.135 -> 0.092), and noisy fast smooth motion (100 points, 12 px/frame, tuning seeds 0-8)
 # went from strict merit 0.50 to 0.74. Each round is one more pass.
 REFITS = 1
-# Slaves in a row a head keeps in the passes where the measured velocity persistence is that of a
-# random walk (below the motion decision's line for smooth motion). There a head that lost its
-# point predicts nothing but its last position, so GOA's frame-by-frame contest between a head
-# back from slaves and the heads beside it knows no more than gap closing, which joins every end
-# to a later start across max_gap at once; in footage where beads drift in and out of focus, heads
-# kept for ten slaves took the points of beads that came into view and two tracks took turns at
-# one bead (bulk water, our detections: 879 of 1218 confident tracks with 10, 951 with 3, 957
-# with 2, 955 with 1). 3 is trackpy's memory, and on random walkers (bench_motion.py, sigma 1.5,
-# 5% missed) 3 and 10 link as well (link error 0.0077 and 0.0079), 1 worse (0.0089). Smooth motion
-# keeps max_gap: its heads predict across the gap (a dish 15% missed fell from strict merit 0.88
-# to 0.60 with 3).
+# Slaves in a row a head keeps in the passes at velocity persistence 0, a random walk. There a head
+# that lost its point predicts nothing but its last position, so GOA's frame-by-frame contest
+# between a head back from slaves and the heads beside it knows no more than gap closing, which
+# joins every end to a later start across max_gap at once; in footage where beads drift in and out
+# of focus, heads kept for ten slaves took the points of beads that came into view and two tracks
+# took turns at one bead (bulk water, our detections: 879 of 1218 confident tracks with 10, 951
+# with 3, 957 with 2, 955 with 1). 3 is trackpy's memory, and on random walkers (bench_motion.py,
+# sigma 1.5, 5% missed) 3 and 10 link as well (link error 0.0077 and 0.0079), 1 worse (0.0089).
+# Smooth motion's heads predict across the gap and keep max_gap (a dish 15% missed fell from strict
+# merit 0.88 to 0.60 with 3); in between, the slaves grow with the persistence (head_slaves), so
+# that no line of persistence flips how long heads last.
 RANDOM_WALK_SLAVES = 3
 
 Track = Callable[[list[np.ndarray], GOAConfig], Tracks]
@@ -182,18 +182,22 @@ def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfi
     return replace(config, individual=model, d_max=min(measured, config.d_max + float(np.hypot(*statistics.drift))))
 
 
-def random_walk(config: GOAConfig) -> bool:
-    """Whether ``config`` tracks with a measured model (:func:`measured_config`) whose velocity
-    persistence is that of a random walk (below 0.5, where the motion decision stops calling the
-    motion smooth); such heads keep at most ``RANDOM_WALK_SLAVES`` slaves in a row.
+def head_slaves(config: GOAConfig, max_gap: int) -> int | None:
+    """Slaves in a row a head keeps in a pass with ``config``: from ``RANDOM_WALK_SLAVES`` at
+    velocity persistence 0 (a random walk's head predicts nothing across a gap but its last
+    position) up to ``max_gap`` frames at persistence 1, in proportion, for a measured model
+    (:func:`measured_config`); None (``max_gap``) for any other model.
 
     Example
     -------
     >>> stats = MotionStatistics(0.1, 0.3, 0.1, (0.0, 0.0), 0.5, 100, fastest=2.0)
-    >>> random_walk(measured_config(GOAConfig(), stats)), random_walk(GOAConfig())
-    (True, False)
+    >>> head_slaves(measured_config(GOAConfig(), stats), 10), head_slaves(GOAConfig(), 10)
+    (4, None)
     """
-    return isinstance(config.individual, PersistentModel) and config.individual.statistics.persistence < _PERSISTENT
+    if not isinstance(config.individual, PersistentModel) or max_gap <= RANDOM_WALK_SLAVES:
+        return None
+    persistence = min(max(config.individual.statistics.persistence, 0.0), 1.0)
+    return RANDOM_WALK_SLAVES + int(round((max_gap - RANDOM_WALK_SLAVES) * persistence))
 
 
 def without_faster_links(tracks: Tracks, limit: float) -> Tracks:
@@ -229,4 +233,4 @@ def without_faster_links(tracks: Tracks, limit: float) -> Tracks:
     )
 
 
-__all__ = ["track_measured_motion", "first_pass", "measured_config", "random_walk", "without_faster_links", "GATE", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]
+__all__ = ["track_measured_motion", "first_pass", "measured_config", "head_slaves", "without_faster_links", "GATE", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]

@@ -18,7 +18,7 @@ import numpy as np
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
-from .adaptive import RANDOM_WALK_SLAVES, REFITS, random_walk, track_measured_motion
+from .adaptive import REFITS, head_slaves, track_measured_motion
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks, point_frames
 
@@ -114,8 +114,8 @@ def link_goa(
         if algorithm == "goa-updown-fixed" or lifecycle is None:
             return goa_updown(moved, fitted, first_frame, progress=progress)
         kept = lifecycle
-        if lifecycle.max_slaves is None and random_walk(fitted):
-            kept = replace(lifecycle, max_slaves=RANDOM_WALK_SLAVES)
+        if lifecycle.max_slaves is None:
+            kept = replace(lifecycle, max_slaves=head_slaves(fitted, lifecycle.max_gap))
         return goa_updown_open(moved, fitted, kept, first_frame, progress=progress)
 
     if motion == "auto" and not keep_model:

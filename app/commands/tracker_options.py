@@ -51,7 +51,7 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         metavar="N",
-        help=f"a track ends after N missed frames in a row (3 in the passes where the motion measured is a random walk); "
+        help=f"a track ends after N missed frames in a row (in the passes with the measured motion, from 3 for a random walk to N for smooth motion); "
         f"gaps up to N frames are filled by interpolation (interpolated=1) and a track end is joined to a track start at most N frames later "
         f"(default {LifecycleConfig().max_gap})",
     )
