@@ -29,7 +29,7 @@ from .goa import GOAConfig
 from .motion import SpeedLimits
 from .persistence import MotionStatistics, PersistentModel, fit_chains, measured_chains
 from .repair import resolve_crossings
-from .regime import _PERSISTENT, MotionFit, choose_motion, fit_motion, track_without_drift
+from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import NO_MEASUREMENT, Tracks
 
 # The measured speed limit is this many times the fastest speed that fits the motion.
