@@ -164,8 +164,15 @@ def read_table(
         raise DataError(path, f"line 1: column(s) {', '.join(repeated)} appear more than once in the header")
     missing = [name for name in required if name not in header]
     if missing:
-        # Excel in many languages saves "CSV" with semicolons, the comma being the decimal mark.
-        separator = "; its fields are separated by semicolons: save it with commas" if len(header) == 1 and ";" in header[0] else ""
+        # Excel in many languages saves "CSV" with semicolons, the comma being the decimal mark;
+        # spreadsheets and ImageJ's Results export tabs (.tsv, .xls saved as text).
+        separator = ""
+        if len(header) == 1:
+            for mark, name in ((";", "semicolons"), ("\t", "tabs")):
+                if mark in header[0]:
+                    separator = f"; its fields are separated by {name}: save it with commas"
+                    header = header[0].split(mark)
+                    break
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}{separator}")
     text = [name for name in header if others_as_text and name not in required and name not in integer]
     try:

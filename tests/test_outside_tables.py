@@ -60,4 +60,10 @@ def test_a_trackmate_table_in_microns_or_with_a_bad_value_is_one_line_naming_its
 def test_a_table_separated_by_semicolons_says_so(tmp_path, capsys):
     (tmp_path / "points.csv").write_text("frame;x;y\n0;1,5;2\n1;2,5;2\n")
     assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "tracks.csv")]) == 2
-    assert capsys.readouterr().err.endswith("found frame;x;y; its fields are separated by semicolons: save it with commas\n")
+    assert capsys.readouterr().err.endswith("found frame, x, y; its fields are separated by semicolons: save it with commas\n")
+
+
+def test_a_table_separated_by_tabs_says_so(tmp_path, capsys):
+    (tmp_path / "points.tsv").write_text("frame\tx\ty\n0\t1.5\t2\n1\t2.5\t2\n")
+    assert main(["track", str(tmp_path / "points.tsv"), "--out", str(tmp_path / "tracks.csv")]) == 2
+    assert capsys.readouterr().err.endswith("found frame, x, y; its fields are separated by tabs: save it with commas\n")
