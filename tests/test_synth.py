@@ -1,7 +1,10 @@
 """End-to-end: ``seedtrack synth psmg``, alone and followed by ``track`` and ``evaluate``."""
 
+import re
+import shlex
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -86,3 +89,16 @@ def test_longer_gaps_and_points_entering_and_leaving(tmp_path):
         flags = truth["interpolated"][mine][np.argsort(truth["frame"][mine])]
         runs += [len(r) for r in "".join(map(str, flags)).split("0") if r]
     assert max(runs) == 3 and min(runs) == 1
+
+
+def test_the_readme_psmg_example_prints_the_figures_it_quotes(tmp_path, monkeypatch, capsys):
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    block = readme.split("With 10% of the points missed:", 1)[1].split("```bash\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(tmp_path)
+    for line in block.splitlines():
+        command, _, comment = line.partition("#")
+        assert main(shlex.split(command)[1:]) == 0
+    quoted = re.fullmatch(r"\s*(\d+) of (\d+) tracks perfect, link error ([\d.]+)\s*", comment)
+    report = capsys.readouterr().out
+    assert (int(quoted[1]), int(quoted[2])) == (_measure(report, "correct_tracks"), _measure(report, "true_tracks"))
+    assert quoted[3] == f"{_measure(report, 'link_error'):.3f}"
