@@ -21,6 +21,7 @@ import pandas as pd
 from .atomic import atomic_path
 from .errors import DataError, check_file, warn
 from .formats import CSV_FORMATS, EXTENSIONS, described
+from .formats.trackmate import check_pixels
 from .numbers import check_range
 
 DETECTION_COLUMNS = ("frame", "x", "y", "area")
@@ -348,7 +349,5 @@ def _point_columns(path: Path) -> tuple[dict[str, str], int]:
     # three rows are skipped, so that a data row is never taken for one.
     label_rows = 3 if len(fields) == 3 and len(fields[0]) > frame_at and fields[0][frame_at].strip() == "Frame" else 0
     if label_rows and len(fields[2]) > x_at:
-        unit = fields[2][x_at].strip().strip("()")
-        if unit and unit.lower() not in ("pixel", "pixels"):
-            raise DataError(path, f"line 4: TrackMate's positions are in {unit}, not pixels; export them from the image with its pixel size set to 1 pixel (Image > Properties)")
+        check_pixels(path, 4, fields[2][x_at].strip().strip("()"))
     return dict(TRACKMATE_POINT_COLUMNS), label_rows

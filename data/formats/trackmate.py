@@ -1,8 +1,8 @@
 """TrackMate XML (Fiji): ``Model/AllSpots/SpotsInFrame/Spot`` and ``Model/AllTracks/Track/Edge``.
 
-A spot carries ``ID``, ``FRAME`` (0-based, as ours) and ``POSITION_X``/``POSITION_Y``, read as
-pixels (TrackMate writes calibrated units when the image is calibrated; the model's
-``spatialunits`` attribute says which). A track is the set of spots its edges
+A spot carries ``ID``, ``FRAME`` (0-based, as ours) and ``POSITION_X``/``POSITION_Y`` in pixels
+(TrackMate writes calibrated units when the image is calibrated, as the model's ``spatialunits``
+attribute says; such a file is refused rather than read as pixels). A track is the set of spots its edges
 (``SPOT_SOURCE_ID``, ``SPOT_TARGET_ID``) join, under its ``TRACK_ID``. When the file lists
 ``FilteredTracks``, only those tracks are read, as TrackMate shows them. Spots on no track
 (unlinked detections) are not tracks and are skipped, so a track of a single point cannot be
@@ -29,6 +29,7 @@ def read(path) -> Rows:
     model = root.find("Model") if root.tag == "TrackMate" else None
     if model is None:
         raise DataError(path, f"line {root.line}: not a TrackMate file (expected <TrackMate><Model>, found <{root.tag}>)")
+    check_pixels(path, model.line, model.attrib.get("spatialunits", ""))
     spots = {}
     for spot in model.iter("Spot"):
         spot_id = int(number(path, spot, "ID", whole=True))
@@ -61,6 +62,22 @@ def read(path) -> Rows:
         warn(path, f"{branched} TrackMate track(s) split or merge; each unbranched part is read as a track of its own")
     table = np.array(rows, dtype=float).reshape(-1, 5)
     return Rows(table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3], table[:, 4].astype(np.int64))
+
+
+def check_pixels(path, line: int, unit: str) -> None:
+    """Refuse TrackMate positions in a calibrated unit (microns...): ours are pixels.
+
+    Raises
+    ------
+    DataError
+        Naming ``path``, ``line`` and the unit, unless ``unit`` is empty or pixels.
+
+    Example
+    -------
+    >>> check_pixels("spots.csv", 4, "pixel")
+    """
+    if unit and unit.lower() not in ("pixel", "pixels"):
+        raise DataError(path, f"line {line}: TrackMate's positions are in {unit}, not pixels; export them from the image with its pixel size set to 1 pixel (Image > Properties)")
 
 
 def write(path, rows: dict[str, np.ndarray]) -> None:
