@@ -38,12 +38,15 @@ def check_file(path) -> Path:
     Raises
     ------
     DataError
-        "no such file", or "is a folder" when it names one (a folder given where a file belongs).
+        "no such file", "is a folder" when it names one (a folder given where a file belongs), or
+        "not a regular file" for a pipe such as bash's ``<(command)``, which cannot be read twice.
     """
 
     path = Path(path)
     if path.is_dir():
         raise DataError(path, "is a folder; give a file")
+    if path.exists() and not path.is_file():
+        raise DataError(path, "not a regular file (a pipe or a device); save it to a file first")
     if not path.is_file():
         raise DataError(path, "no such file")
     return path

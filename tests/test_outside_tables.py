@@ -1,5 +1,7 @@
 """Point and track tables as other tools' users save them."""
 
+import os
+
 import pandas as pd
 import pytest
 
@@ -67,3 +69,11 @@ def test_a_table_separated_by_tabs_says_so(tmp_path, capsys):
     (tmp_path / "points.tsv").write_text("frame\tx\ty\n0\t1.5\t2\n1\t2.5\t2\n")
     assert main(["track", str(tmp_path / "points.tsv"), "--out", str(tmp_path / "tracks.csv")]) == 2
     assert capsys.readouterr().err.endswith("found frame, x, y; its fields are separated by tabs: save it with commas\n")
+
+
+def test_a_pipe_given_for_a_file_is_named_as_one(tmp_path, capsys):
+    # bash's <(command) passes a pipe; "no such file" sent the user looking for a missing file.
+    os.mkfifo(tmp_path / "truth.csv")
+    (tmp_path / "tracks.csv").write_text("track_id,frame,x,y\n0,0,1,1\n0,1,2,2\n")
+    assert main(["evaluate", str(tmp_path / "tracks.csv"), "--truth", str(tmp_path / "truth.csv")]) == 2
+    assert capsys.readouterr().err == f"seedtrack evaluate: error: {tmp_path / 'truth.csv'}: not a regular file (a pipe or a device); save it to a file first\n"
