@@ -24,6 +24,7 @@ from typing import Sequence
 from seedtrack.data.errors import DataError, DataWarning
 
 from .errors import UsageError
+from .processes import default_workers, start_fork_server
 
 # Command name -> the line ``seedtrack --help`` lists it with, in the order listed.
 COMMANDS = {
@@ -111,6 +112,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("always", DataWarning)
             warnings.showwarning = lambda message, *_, **__: print(f"{prefix}: warning: {' '.join(str(message).splitlines())}", file=sys.stderr)
+            if command == "run" and _workers_asked(argv) > 1:
+                # run's encoder process comes from the fork server: started before run's own
+                # imports, the server's imports (numpy, OpenCV, PyAV) run beside them.
+                start_fork_server()
             args = build_parser(command).parse_args(argv)
             return args.run(args)
     except (DataError, UsageError) as error:
@@ -129,6 +134,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _fail(prefix, f"{error.filename}: {cause}" if error.filename else cause)
     except MemoryError:
         return _fail(prefix, "not enough memory for this input; use fewer frames or points, or a smaller --scale")
+
+
+def _workers_asked(argv: Sequence[str]) -> int:
+    """The number of workers ``argv`` asks for, read before the command's parser reads it: 1 if
+    ``--workers`` is not a number (the parser says why) or with ``--help`` (nothing runs)."""
+    early = argparse.ArgumentParser(add_help=False)
+    early.add_argument("-h", "--help", action="store_true")
+    early.add_argument("--workers")
+    known, _ = early.parse_known_args(argv)
+    if known.help:
+        return 1
+    try:
+        return int(known.workers) if known.workers is not None else default_workers()
+    except ValueError:
+        return 1
 
 
 def _fail(prefix: str, message: str) -> int:

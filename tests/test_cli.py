@@ -142,3 +142,13 @@ def test_version_is_the_installed_package_version():
 
     result = seedtrack("--version")
     assert result.returncode == 0 and result.stdout.strip() == f"seedtrack {version('seedtrack')}"
+
+
+def test_run_starts_the_fork_server_before_its_imports_only_for_more_than_one_worker():
+    from seedtrack.cli import _workers_asked
+
+    assert _workers_asked(["run", "clip.mp4", "--out", "out", "--workers", "2"]) == 2
+    assert _workers_asked(["run", "clip.mp4", "--workers=3", "--out", "out"]) == 3
+    assert _workers_asked(["run", "clip.mp4", "--out", "out", "--workers", "1"]) == 1
+    assert _workers_asked(["run", "--help"]) == 1
+    assert _workers_asked(["run", "clip.mp4", "--out", "out", "--workers", "two"]) == 1

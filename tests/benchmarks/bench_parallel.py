@@ -12,11 +12,13 @@ Run as ``python tests/benchmarks/bench_parallel.py [--quick]``. Prints, for a ge
 and, for generated 128x128 clips of 2,000 and 20,000 frames with 6 seeds, ``run``'s peak memory
 (``--workers 1``, one process: its maximum resident set) and their ratio (the goal: at most 1.2).
 ``--quick`` skips the 20,000-frame clip, ``--memory-only`` the 300-frame clip, and ``--repeats N``
-measures each long clip N times and prints the median of each and of their ratio. ``--phases``
+runs the 300-frame clip N times with each number of workers (in turns) and measures each long
+clip N times, and prints the median of each figure and of the ratios. ``--phases``
 prints instead, for one ``run --workers 2`` of the 300-frame clip, each phase's wall time and the
 CPU time of every thread of ``run`` and of the processes it starts (read from /proc every 20 ms),
 with the wall time two free cores would need at least: the larger of half the phase's CPU time
-and its busiest thread's (imports not counted). CPU times change little with the load, so on a
+and its busiest thread's; the imports phase is ``run``'s own beside the fork server's, started
+first as ``run`` starts it. CPU times change little with the load, so on a
 busy machine that bound says what the wall time alone cannot. Wall times on a shared machine include what other
 programs take; run it when the machine is quiet, and read the CPU times beside them.
 """
@@ -99,7 +101,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="skip the 20,000-frame clip")
     parser.add_argument("--memory-only", action="store_true", help="skip the 300-frame clip (cores and frames/s)")
-    parser.add_argument("--repeats", type=int, default=1, metavar="N", help="peak memory measurements per long clip (default 1)")
+    parser.add_argument("--repeats", type=int, default=1, metavar="N", help="runs of the 300-frame clip per number of workers, and peak memory measurements per long clip (default 1)")
     parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of one run with 2 workers")
     args = parser.parse_args()
     become_subreaper()
@@ -109,22 +111,33 @@ def main() -> None:
             phases(folder)
             return
         if not args.memory_only:
-            cores(folder)
+            cores(folder, args.repeats)
         long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
 
 
-def cores(folder: Path) -> None:
-    """CPU over wall time and frames/s of ``run`` on a 300-frame 640x512 clip."""
+def cores(folder: Path, repeats: int) -> None:
+    """CPU over wall time and frames/s of ``run`` on a 300-frame 640x512 clip, ``repeats`` turns
+    of each number of workers."""
     clip = folder / "dish" / "clip.mp4"
     write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
+    counts = ("1", str(default_workers()))
     decode = min(decode_seconds(clip) for _ in range(2))
     print(f"300 frames, 640x512, 80 seeds; {default_workers()} cores usable; load average {os.getloadavg()[0]:.1f}")
     print(f"decoding alone: {300 / decode:.0f} frames/s")
-    print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    for workers in ("1", str(default_workers())):
-        wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
-        print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} |")
+    print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's | load average |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    rows = {workers: [] for workers in counts}
+    for _ in range(repeats):
+        for workers in counts:
+            load = os.getloadavg()[0]
+            wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
+            rows[workers].append((wall, cpu))
+            print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} | {load:.1f} |")
+    if repeats > 1:
+        for workers in counts:
+            walls, cpus = zip(*rows[workers])
+            ratios = [cpu / wall for wall, cpu in rows[workers]]
+            print(f"| {workers}, median of {repeats} | {statistics.median(walls):.1f} | {statistics.median(cpus):.1f} | {statistics.median(ratios):.2f} ({min(ratios):.2f} to {max(ratios):.2f}) | {300 / statistics.median(walls):.0f} | {decode / statistics.median(walls):.0%} | |")
     same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
     print(f"files identical for 1 and {default_workers()} workers: {same}")
 
@@ -132,7 +145,6 @@ def cores(folder: Path) -> None:
 _PHASES = """
 import os, sys, threading, time
 from pathlib import Path
-import seedtrack.pipeline as pipeline
 
 TICK = os.sysconf("SC_CLK_TCK")
 ME = os.getpid()
@@ -189,11 +201,16 @@ def marked(name, function):
 
 
 if __name__ == "__main__":
+    threading.Thread(target=sampler, daemon=True).start()
+    mark("")
+    mark("imports")
+    # As `seedtrack run` does before its imports.
+    from seedtrack.processes import start_fork_server
+    start_fork_server()
+    import seedtrack.pipeline as pipeline
     pipeline.detect_clip = marked("detection", pipeline.detect_clip)
     pipeline.track_frames = marked("tracking", pipeline.track_frames)
     pipeline._render = marked("overlay", pipeline._render)
-    threading.Thread(target=sampler, daemon=True).start()
-    mark("")
     pipeline.run_pipeline(Path(sys.argv[1]), Path(sys.argv[2]), workers=2)
     time.sleep(0.1)  # the encoder's last CPU time is read before it is reaped
     mark("end")
@@ -212,7 +229,7 @@ def phases(folder: Path) -> None:
     script.write_text(_PHASES)
     load = os.getloadavg()[0]
     lines = subprocess.run([sys.executable, str(script), str(clip), str(folder / "out")], check=True, capture_output=True, text=True).stdout.splitlines()
-    print(f"run --workers 2, 300 frames, 640x512, 80 seeds; load average {load:.1f}; imports not counted")
+    print(f"run --workers 2, 300 frames, 640x512, 80 seeds; load average {load:.1f}")
     print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
     print("| --- | --- | --- | --- | --- |")
     totals = [0.0, 0.0, 0.0]

@@ -1,0 +1,65 @@
+"""Cores and worker processes, without numpy or the rest: :mod:`seedtrack.cli` may start the fork
+server before the command's own imports, so that the server's imports run beside them.
+
+:mod:`seedtrack.parallel` starts the worker processes from here.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import multiprocessing.forkserver
+import os
+
+# Worker processes are started by a fork server: a clean process (no decoder or OpenCV threads
+# copied half-way through their work, as fork would) that has imported the encoder once.
+# The first preload leaves Ctrl-C to the command: a terminal's Ctrl-C reaches every process of its
+# group, and the fork server took it while importing the others (seconds on a loaded machine),
+# printing a traceback of its own beside the command's one line.
+_PRELOAD = ["seedtrack.ctrl_c_ignored", "seedtrack.parallel"]
+
+
+def default_workers() -> int:
+    """The number of cores this process may run on (its CPU affinity), at least 1.
+
+    Example
+    -------
+    >>> default_workers() >= 1
+    True
+    """
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # macOS and Windows have no affinity call
+        return max(1, os.cpu_count() or 1)
+
+
+def can_start_processes() -> bool:
+    """Whether this process may start worker processes (a daemonic one, such as a Dask
+    worker's, may not).
+
+    Example
+    -------
+    >>> can_start_processes()
+    True
+    """
+    return not multiprocessing.current_process().daemon
+
+
+def process_context() -> multiprocessing.context.BaseContext:
+    """The multiprocessing context workers are started from (a fork server where there is one)."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(_PRELOAD)
+    return context
+
+
+def start_fork_server() -> None:
+    """Start the fork server now, if there is one and this process may start workers; it imports
+    its preloads (about half a second of one core) while this process goes on.
+
+    Example
+    -------
+    >>> start_fork_server()
+    """
+    if can_start_processes() and process_context().get_start_method() == "forkserver":
+        multiprocessing.forkserver.ensure_running()
