@@ -92,7 +92,9 @@ def choose_detector(
     if detector == "spot":
         return DetectorChoice("spot", f"spot detector, as asked; {describe(settings)}", settings)
     if shape.diameter > _LARGEST_SPOT_PX:
-        return DetectorChoice("blob", f"objects about {shape.diameter} px across, larger than spots: blob detector")
+        # Said as the scale-space sigma, not as the spot diameter (6 sigma wide), which is no
+        # object's size: a disc of radius r peaks at sigma r / sqrt(2).
+        return DetectorChoice("blob", f"objects of scale sigma {shape.sigma:.1f} px (spot diameter {shape.diameter} px, above {_LARGEST_SPOT_PX}), larger than spots: blob detector")
     if shape.elongation > _ELONGATED:
         return DetectorChoice("blob", f"elongated objects ({shape.elongation:.2f} times as sharp across as along): blob detector")
     return DetectorChoice("spot", f"small round spots ({shape.elongation:.2f} times as sharp across as along): spot detector, {describe(settings)}", settings)

@@ -159,3 +159,15 @@ def test_the_valley_between_noise_and_spots_is_taken_only_where_there_is_one():
     # A gap far above the noise's median (faint spots running on from the noise, then bright
     # ones) is no valley of noise: the faint ones are kept.
     assert _valley(np.concatenate([noise, np.geomspace(noise.max(), 300, 100), rng.uniform(2000, 2500, 10)]), 4.0) == 0
+
+
+def test_large_objects_are_said_by_their_scale_not_the_spot_diameter():
+    # Dark discs of radius 6 px (12 px across) on white: the spot diameter that would fit them
+    # (6 sigma) is about twice their width, so the reason states the sigma, r / sqrt(2) = 4.2 px.
+    image = np.full((96, 96), 230, np.uint8)
+    for x, y in ((24, 24), (70, 30), (40, 70)):
+        cv2.circle(image, (x, y), 6, 30, -1)
+    choice = choose_detector(image, "dark")
+    assert choice.name == "blob"
+    sigma = float(choice.reason.split("sigma ")[1].split(" px")[0])
+    assert 3.2 <= sigma <= 5.0 and "across" not in choice.reason
