@@ -1,6 +1,8 @@
 """The measured motion model: statistics fitted on tracks, the link cost, encounters over five
 frames, and the default that tracks twice."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -13,7 +15,7 @@ from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, goa_updown_open
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.motion import Candidates
-from seedtrack.tracking.persistence import MotionStatistics, PersistentModel, fit_statistics
+from seedtrack.tracking.persistence import MotionStatistics, PersistentModel, fit_statistics, measured_chains
 from seedtrack.tracking.repair import resolve_crossings
 from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
 
@@ -150,6 +152,27 @@ def test_a_link_across_a_gap_costs_more_than_one_over_a_frame_at_the_same_distan
         pairs = Candidates(np.arange(2), np.arange(2), velocity * gap[:, None], gap, previous)
         cost = model.cost(pairs, 0.1, 50.0)
         assert cost[1] > cost[0] == pytest.approx(0.1 / 9.0)
+
+
+def test_each_missed_frame_of_a_link_pays_the_measured_chance_of_a_miss():
+    # A head back from two slaves pays -2 ln(0.01) per missed frame on top of the same link
+    # without a measured miss rate; a link over one frame pays nothing for it.
+    walk = MotionStatistics(0.0, 1.0, 0.0, (0.0, 0.0), 1.0, 100)
+    gap = np.array([1, 3])
+    pairs = Candidates(np.arange(2), np.arange(2), np.array([[1.0, 0.0], [1.0, 0.0]]), gap, np.zeros((2, 2)))
+    free = PersistentModel(walk, gate=3.0).cost(pairs, 0.1, 50.0)
+    charged = PersistentModel(replace(walk, missed=0.01), gate=3.0).cost(pairs, 0.1, 50.0)
+    assert charged - free == pytest.approx([0.0, 0.1 * 2 * 2 * np.log(100) / 9.0])
+
+
+def test_the_chance_of_a_miss_is_measured_on_the_tracks():
+    # 3 filled-in points of 60 (Laplace's rule: (3 + 1) / (60 + 2)).
+    rng = np.random.default_rng(5)
+    xy = np.cumsum(rng.normal(0, 1, (6, 10, 2)), axis=1) + np.arange(6)[:, None, None] * [50.0, 0.0]
+    index = np.zeros((6, 10), np.int64)
+    index[[0, 2, 4], [3, 5, 7]] = NO_MEASUREMENT
+    assert measured_chains(Tracks.from_dense(xy, index)).missed == pytest.approx(4 / 62)
+    assert fit_statistics(Tracks.from_dense(xy, index)).missed == pytest.approx(4 / 62)
 
 
 def test_default_tracks_noisy_smooth_motion_better_than_the_smooth_model_alone():

@@ -70,6 +70,9 @@ class MotionStatistics:
         ``noise`` and ``relative`` are per axis (pixels/frame, per pixel/frame of speed): speed
         steps and turns differ (PSMG-like motion: speed steps of a fixed size, turns that grow
         with the speed). None: both are ``noise`` and ``relative``.
+    missed : float or None
+        Chance that a tracked point is missed in a frame, measured on the tracks (their filled-in
+        share); a link across missed frames pays for each. None: gaps pay nothing for it.
     """
 
     persistence: float
@@ -82,6 +85,7 @@ class MotionStatistics:
     fastest: float = 0.0
     along: tuple[float, float] | None = None
     across: tuple[float, float] | None = None
+    missed: float | None = None
 
     def describe(self) -> str:
         """One line for the user."""
@@ -130,12 +134,15 @@ class Chains:
         Median velocity (x, y) of all measured links, pixels/frame.
     spread : float
         Robust per-axis spread of the links' velocities about the drift, pixels/frame.
+    missed : float or None
+        Chance that a tracked point is missed in a frame (see :class:`MotionStatistics`).
     """
 
     before: np.ndarray
     after: np.ndarray
     drift: np.ndarray
     spread: float
+    missed: float | None = None
 
 
 def measured_chains(tracks: Tracks) -> Chains | None:
@@ -155,6 +162,8 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     # in the tracks' cache: a link joins a measured point to the track's measured point in the
     # next frame; in track-then-frame order, as the points are.
     measured = tracks.point_measurement != NO_MEASUREMENT
+    # Laplace's rule on the tracks' points: tracks with no gap at all still leave a chance.
+    missed = (np.count_nonzero(tracks.point_interpolated) + 1.0) / (measured.size + 2.0)
     link = (tracks.point_track[1:] == tracks.point_track[:-1]) & (tracks.point_column[1:] == tracks.point_column[:-1] + 1)
     link &= measured[1:] & measured[:-1]
     start = np.flatnonzero(link)
@@ -176,7 +185,7 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     del velocities
     b_all -= drift
     a_all -= drift
-    return Chains(b_all, a_all, drift, spread)
+    return Chains(b_all, a_all, drift, spread, missed)
 
 
 def fit_chains(chains: Chains) -> MotionStatistics:
@@ -249,6 +258,7 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         fastest,
         along,
         across,
+        chains.missed,
     )
 
 
@@ -384,6 +394,12 @@ class PersistentModel:
         # from a slave wins a point at the same distance from two heads, and two tracks take
         # turns at one walker by the view's edge.
         spread = 2.0 * np.log(gap * gap * growth)
+        # Each missed frame is a miss of the measured chance: a head back from slaves pays for
+        # them against heads that missed nothing. Without it tracks on slaves took walkers'
+        # points where no point is ever missed (sigma 3, tuning seeds 0-11: 12 of the 61 links
+        # only seedtrack got wrong against trackpy, 5 with it).
+        if s.missed is not None:
+            spread -= 2.0 * (gap - 1.0) * np.log(s.missed)
         return phi_max * (squared / variance + spread) / self.gate**2
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
