@@ -22,13 +22,11 @@ from typing import Callable
 
 import numpy as np
 
-from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
-from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.linking import link_goa
+from bench_motion import SEED_SETS, TRACKERS as MOTION_TRACKERS
+from seedtrack.peers import PeerFailure
 from seedtrack.tracking.metrics import UNMATCHED, match_points, score_tracks, true_track_owners
 from seedtrack.tracking.tracks import Tracks
 
-SEED_SETS = {"tuning": 0, "reporting": 1000}
 # A confident track: in view this many frames; reproduced when one track holds this share of it.
 CONFIDENT_FRAMES = 25
 REPRODUCED_SHARE = 0.8
@@ -111,9 +109,7 @@ SCENES: dict[str, dict] = {
 }
 
 TRACKERS: dict[str, Callable[[list[np.ndarray], float], Tracks]] = {
-    "seedtrack (no options)": lambda frames, _limit: link_goa(frames, "goa-updown", GOAConfig())[0],
-    "trackpy memory 3": lambda frames, limit: trackpy_linker("plain", memory=3)(frames, limit, 0),
-    "laptrack": lambda frames, limit: PEERS["laptrack"](frames, limit, 0),
+    name: MOTION_TRACKERS[name] for name in ("seedtrack (no options)", "trackpy memory 3", "laptrack")
 }
 
 
