@@ -58,6 +58,20 @@ def test_touching_spots_stay_apart():
     np.testing.assert_allclose(np.sort(found["x"]), [40.0, 46.0], atol=0.35)
 
 
+def test_a_wide_bead_is_centred_on_all_its_light_as_trackpy_centres_it():
+    # An out-of-focus bead twice as wide as the clip's spots, its bright core 3 px off centre:
+    # a window of the clip's spot size centres it on the core side, 0.57 px from trackpy's
+    # flat-disc centroid; the bead's own size widens the window to all its light.
+    trackpy = pytest.importorskip("trackpy")
+    trackpy.quiet()
+    frame = gaussians([(50.0, 40.0)], sigma=4.0, amplitude=30.0, background=10.0) + gaussians([(53.0, 40.0)], sigma=1.0, amplitude=30.0, background=0.0)
+    found = detect_spots(frame, SpotSettings(diameter=11, min_mass=1))
+    reference = trackpy.locate(frame, 11, minmass=0)
+    assert len(found["x"]) == 1 and len(reference) == 1
+    assert abs(found["x"][0] - reference["x"].iloc[0]) < 0.5
+    assert abs(found["y"][0] - reference["y"].iloc[0]) < 0.05
+
+
 def test_same_content_in_8_16_bit_and_float_gives_the_same_spots():
     image = np.clip(gaussians([(30.2, 20.6), (70.0, 55.0)]) + np.random.default_rng(1).normal(0, 3, ROWS.shape), 0, 255).astype(np.uint8)
     tables = []
