@@ -17,13 +17,11 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 from typing import Callable
 
 import numpy as np
 
-from bench_motion import SEED_SETS, TRACKERS as MOTION_TRACKERS
-from seedtrack.peers import PeerFailure
+from bench_motion import SEED_SETS, TRACKERS as MOTION_TRACKERS, measure_runs
 from seedtrack.tracking.metrics import UNMATCHED, match_points, score_tracks, true_track_owners
 from seedtrack.tracking.tracks import Tracks
 
@@ -128,16 +126,7 @@ def main() -> None:
         for tracker_name, track in TRACKERS.items():
             if args.only not in tracker_name:
                 continue
-            link, share, seconds = [], [], []
-            for frames, truth, limit in scenes:
-                start = time.process_time()
-                try:
-                    result = track(frames, limit)
-                except PeerFailure:
-                    continue
-                seconds.append(time.process_time() - start)
-                link.append(score_tracks(result, truth, 1.0).link_error)
-                share.append(reproduced(result, truth))
+            (link, share), seconds = measure_runs(track, scenes, (lambda tracks, truth: score_tracks(tracks, truth, 1.0).link_error, reproduced))
             if not link:
                 print(f"| {scene_name} | {per_frame:.0f} | {tracker_name} | failed | failed | |")
                 continue

@@ -87,6 +87,23 @@ TRACKERS: dict[str, Callable[[list[np.ndarray], float], Tracks]] = {
 }
 
 
+def measure_runs(track: Callable, scenes: list[Scene], measures: tuple[Callable[[Tracks, Tracks], float], ...]) -> tuple[list[list[float]], list[float]]:
+    """Each measure's values over the ``(frames, truth, limit)`` scenes and the CPU seconds of
+    ``track`` on each, leaving out the runs a peer could not finish."""
+    values: list[list[float]] = [[] for _ in measures]
+    seconds = []
+    for frames, truth, limit in scenes:
+        start = time.process_time()
+        try:
+            result = track(frames, limit)
+        except PeerFailure:
+            continue
+        seconds.append(time.process_time() - start)
+        for column, measure in zip(values, measures):
+            column.append(measure(result, truth))
+    return values, seconds
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -101,16 +118,7 @@ def main() -> None:
             continue
         scenes = [make(seed) for seed in range(first, first + args.runs)]
         for tracker_name, track in TRACKERS.items():
-            idf1, link, seconds = [], [], []
-            for frames, truth, limit in scenes:
-                start = time.process_time()
-                try:
-                    result = track(frames, limit)
-                except PeerFailure:
-                    continue
-                seconds.append(time.process_time() - start)
-                idf1.append(clear_mot(result, truth, 1.0).idf1)
-                link.append(score_tracks(result, truth, 1.0).link_error)
+            (idf1, link), seconds = measure_runs(track, scenes, (lambda tracks, truth: clear_mot(tracks, truth, 1.0).idf1, lambda tracks, truth: score_tracks(tracks, truth, 1.0).link_error))
             if not idf1:
                 print(f"| {scene_name} | {tracker_name} | failed | failed | |")
                 continue
