@@ -73,6 +73,13 @@ class MotionStatistics:
     missed : float or None
         Chance that a tracked point is missed in a frame, measured on the tracks (their filled-in
         share); a link across missed frames pays for each. None: gaps pay nothing for it.
+    sudden : float
+        Share of velocity changes the smooth model does not explain beyond its own Gaussian tail
+        (bounces off a wall, collisions, a first pass's wrong links).
+    density : float or None
+        Measured points per frame per square pixel. With ``sudden`` and ``missed``, a link to any
+        velocity no faster than the last is weighed against a miss (see
+        :meth:`PersistentModel.cost`). None: no such links.
     """
 
     persistence: float
@@ -86,6 +93,8 @@ class MotionStatistics:
     along: tuple[float, float] | None = None
     across: tuple[float, float] | None = None
     missed: float | None = None
+    sudden: float = 0.0
+    density: float | None = None
 
     def describe(self) -> str:
         """One line for the user."""
@@ -136,6 +145,8 @@ class Chains:
         Robust per-axis spread of the links' velocities about the drift, pixels/frame.
     missed : float or None
         Chance that a tracked point is missed in a frame (see :class:`MotionStatistics`).
+    density : float or None
+        Measured points per frame per square pixel of the box they fill.
     """
 
     before: np.ndarray
@@ -143,6 +154,7 @@ class Chains:
     drift: np.ndarray
     spread: float
     missed: float | None = None
+    density: float | None = None
 
 
 def measured_chains(tracks: Tracks) -> Chains | None:
@@ -164,6 +176,10 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     measured = tracks.point_measurement != NO_MEASUREMENT
     # Laplace's rule on the tracks' points: tracks with no gap at all still leave a chance.
     missed = (np.count_nonzero(tracks.point_interpolated) + 1.0) / (measured.size + 2.0)
+    seen = tracks.point_xy[measured]
+    box = np.prod(np.maximum(np.ptp(seen, axis=0), 1.0)) if seen.size else 1.0
+    density = float(seen.shape[0] / (max(tracks.n_frames, 1) * box))
+    del seen
     link = (tracks.point_track[1:] == tracks.point_track[:-1]) & (tracks.point_column[1:] == tracks.point_column[:-1] + 1)
     link &= measured[1:] & measured[:-1]
     start = np.flatnonzero(link)
@@ -185,7 +201,7 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     del velocities
     b_all -= drift
     a_all -= drift
-    return Chains(b_all, a_all, drift, spread, missed)
+    return Chains(b_all, a_all, drift, spread, missed, density)
 
 
 def fit_chains(chains: Chains) -> MotionStatistics:
@@ -246,6 +262,9 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         if keep.sum() < _MIN_TRIPLETS:
             keep = squared <= np.quantile(squared, 0.5)
     fastest = float(np.quantile(np.sqrt(speed2[keep]), _FASTEST)) if keep.any() else 0.0
+    # Gaussian changes fall beyond the cut with probability exp(-cut); the excess is the share of
+    # changes the smooth model does not explain.
+    sudden = max(float(np.mean(~keep)) - float(np.exp(-_CUT)), 0.0)
     along, across = _components(b_all, a_all, speed2, fitted & (speed2 > 0), persistence, turn)
     return MotionStatistics(
         persistence,
@@ -259,6 +278,8 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         along,
         across,
         chains.missed,
+        sudden,
+        chains.density,
     )
 
 
@@ -393,6 +414,21 @@ class PersistentModel:
         # (twice the log of that ratio, in units of the squared distance). Without it a head back
         # from a slave wins a point at the same distance from two heads, and two tracks take
         # turns at one walker by the view's edge.
+        squared = squared / variance
+        if s.sudden > 0 and s.missed is not None and s.density:
+            # A sudden change: any velocity no faster than the last (a bounce off a wall reverses
+            # a component and, where the wall stops it, shortens the step: many sigmas of the
+            # smooth model; without this its head took slaves and ran on while a new track
+            # started on the bounced point). Its chance, the measured share of sudden changes
+            # spread evenly over the disc of the last speed (plus a sigma, Gaussian beyond), is
+            # weighed against the head's point being missed and this one being any other point
+            # (the measured point density): such a link costs phi_max, as a slave does, where the
+            # two are as likely, less where the change is likelier.
+            reach = np.sqrt(speed2) + np.sqrt(variance)
+            away = np.hypot(*(candidates.velocity - drift).T)
+            turned = np.maximum(away - reach, 0.0) ** 2 / variance + 2.0 * np.log(np.pi * reach**2)
+            turned += self.gate**2 - 2.0 * np.log(s.sudden / (s.missed * s.density))
+            squared = np.where(known, np.minimum(squared, np.maximum(turned, 0.0)), squared)
         spread = 2.0 * np.log(gap * gap * growth)
         # Each missed frame is a miss of the measured chance: a head back from slaves pays for
         # them against heads that missed nothing. Without it tracks on slaves took walkers'
@@ -400,7 +436,7 @@ class PersistentModel:
         # only seedtrack got wrong against trackpy, 5 with it).
         if s.missed is not None:
             spread -= 2.0 * (gap - 1.0) * np.log(s.missed)
-        return phi_max * (squared / variance + spread) / self.gate**2
+        return phi_max * (squared + spread) / self.gate**2
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can cost under phi_max, pixels/frame."""
@@ -411,6 +447,10 @@ class PersistentModel:
         about = speed + drift
         moving = drift + s.persistence * about + self.gate * np.sqrt(s.noise**2 + s.relative**2 * about**2)
         still = drift + self.gate * np.sqrt(s.spread**2 + s.noise**2)
+        if s.sudden > 0 and s.missed is not None and s.density:
+            # A sudden change to any velocity up to the last speed and a sigma, plus fewer
+            # sigmas than the gate's beyond it (its chance is weighed against a miss's, above).
+            moving = np.maximum(moving, drift + about + (1.0 + self.gate) * np.sqrt(s.noise**2 + s.relative**2 * about**2))
         return np.where(has_history, moving, still) * (1 + 1e-9) + 1e-9
 
 
