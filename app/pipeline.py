@@ -290,8 +290,7 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
 
     Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
-    tracking, and the overlay's first frames decode while tracking runs; the files are the same
-    for any number.
+    tracking; the files are the same for any number.
 
     Each file is written whole or not at all, in that order, so an interruption keeps what was
     finished; an output folder made here and still empty is removed again.
