@@ -10,7 +10,6 @@ clip's length does not bound what can be processed.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import sys
 from dataclasses import dataclass
@@ -46,9 +45,6 @@ __all__ = [
 
 # Past positions in each track's fading trail on the overlay of `run`.
 TRAIL = 10
-# Frames of the overlay decoded while `run` tracks: as many as this many bytes of 8-bit BGR hold
-# (a 4:2:0 video's decoded frames take half that).
-DECODED_AHEAD_BYTES = 128 * 2**20
 
 
 @dataclass(frozen=True)
@@ -245,44 +241,29 @@ def render_overlay(
     and, with more than one, the encoder has a process of its own; the file is the same for any
     number.
     """
-    with VideoEncoder(out, fps, workers) as encoder, _overlay_frames(path, selection, workers, ahead=False) as frames:
-        _render(frames, tracks, detections, encoder, trail, workers)
+    with VideoEncoder(out, fps, workers) as encoder:
+        _render(path, tracks, detections, encoder, trail, selection, workers)
 
 
-@contextlib.contextmanager
-def _overlay_frames(path: Path, selection: DetectionSettings | None, workers: int, ahead: bool):
-    """The frames the overlay is drawn over: ``(source, frames)``, the frames decoded by a thread
-    of their own (:meth:`seedtrack.data.frames.FrameSource.unconverted`, converted where they
-    are drawn), a few ahead of drawing, or with ``ahead`` and more than one worker as many as
-    :data:`DECODED_AHEAD_BYTES` of 8-bit BGR would hold, before drawing starts."""
+def _render(path: Path, tracks: Tracks, detections: Detections, encoder: VideoEncoder, trail: int, selection: DetectionSettings | None, workers: int) -> None:
+    """:func:`render_overlay` into an encoder already started."""
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
-        depth = 4
-        if ahead and workers > 1:
-            width, height = source.size
-            depth = max(depth, DECODED_AHEAD_BYTES // (width * height * 3))
-        with read_ahead(source.unconverted(), depth) as read:
-            yield source, read
+        view = View.of(source.size)
+        layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
+        rows = detections.to_rows()
+        false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
+        draw = functools.partial(_annotate_pair, span=source.span, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
+        # The next frames decode beside drawing, as in detection.
+        with progress_bar(source.frame_count, "rendering") as bar, read_ahead(source) as read:
+            encoder.write(threaded_map(draw, read, workers), progress=bar)
 
 
-def _render(frames, tracks: Tracks, detections: Detections, encoder: VideoEncoder, trail: int, workers: int) -> None:
-    """:func:`render_overlay` into an encoder already started, of the frames of
-    :func:`_overlay_frames`."""
-    source, read = frames
-    view = View.of(source.size)
-    layer = TrackLayer(tracks, view, trail=trail, frame_indices=detections.frame_indices)
-    rows = detections.to_rows()
-    false = FalseDetections(rows["frame"], rows["x"], rows["y"], tracks, view, frame_indices=detections.frame_indices)
-    draw = functools.partial(_annotate_pair, span=source.span, view=view, layers=[layer], false_detections=false, legend=track_legend(True))
-    with progress_bar(source.frame_count, "rendering") as bar:
-        encoder.write(threaded_map(draw, read, workers), progress=bar)
-
-
-def _annotate_pair(frame: tuple[int, Callable[[], np.ndarray]], span: tuple[float, float], **options) -> np.ndarray:
-    """:func:`seedtrack.drawing.annotate` of a frame source's unconverted ``(frame_index,
-    image)``, shown from the source's ``span`` (:func:`seedtrack.data.depth.to_bgr8`)."""
+def _annotate_pair(frame: tuple[int, np.ndarray], span: tuple[float, float], **options) -> np.ndarray:
+    """:func:`seedtrack.drawing.annotate` of a frame source's ``(frame_index, image)``, shown
+    from the source's ``span`` (:func:`seedtrack.data.depth.to_bgr8`)."""
     index, image = frame
-    return annotate(to_bgr8(image(), span), index, **options)
+    return annotate(to_bgr8(image, span), index, **options)
 
 
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
@@ -303,10 +284,8 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
-        # The overlay's first frames decode beside tracking too: drawing needs the tracks, but
-        # decoding them does not, and tracking runs on one core.
-        with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder, _overlay_frames(clip, detection, workers, ahead=True) as frames:
+        with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
             write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
-            _render(frames, tracks, detections, encoder, TRAIL, workers)
+            _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks

@@ -21,12 +21,11 @@ frame's own brightness does not stretch it.
 from __future__ import annotations
 
 import abc
-import functools
 import glob
 import os
 import re
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Iterator
 
 import av
 import cv2
@@ -85,29 +84,8 @@ class FrameSource:
         self.stopped_early: str | None = None
 
     def __iter__(self) -> Iterator[Frame]:
-        return self._read(convert=True)
-
-    def unconverted(self) -> Iterator[tuple[int, Callable[[], np.ndarray]]]:
-        """Iterate as ``(frame_index, image)`` with ``image()`` the image iteration yields: a
-        video's frame is converted from the decoder's pixel format when it is called (in any
-        thread), and until then holds the decoder's picture, half the bytes of 8-bit BGR for
-        4:2:0 video.
-
-        Example
-        -------
-        >>> import cv2, numpy as np, tempfile
-        >>> path = tempfile.mkdtemp() + "/frame.png"
-        >>> _ = cv2.imwrite(path, np.full((2, 3), 7, np.uint8))
-        >>> with open_frames(path) as source:
-        ...     [(index, image().shape) for index, image in source.unconverted()]
-        [(0, (2, 3, 3))]
-        """
-        for index, image in self._read(convert=False):
-            yield index, image if callable(image) else functools.partial(_itself, image)
-
-    def _read(self, convert: bool) -> Iterator[tuple[int, np.ndarray | Callable[[], np.ndarray]]]:
         self.stopped_early = None
-        for index, image, problem in self._reader.read(self._start, self._stop, self._step, convert):
+        for index, image, problem in self._reader.read(self._start, self._stop, self._step):
             if problem is not None:
                 self.stopped_early = f"decoding stopped at frame {index}: {problem}"
                 return
@@ -128,10 +106,6 @@ class FrameSource:
 
     def __exit__(self, *exc_info) -> None:
         self.close()
-
-
-def _itself(image: np.ndarray) -> np.ndarray:
-    return image
 
 
 def open_frames(path: str | os.PathLike, *, start: int = 0, end: int | None = None, step: int = 1) -> FrameSource:
@@ -242,10 +216,9 @@ class _Reader(abc.ABC):
     span: tuple[float, float] = (0.0, 255.0)
 
     @abc.abstractmethod
-    def read(self, start: int, stop: int | None, step: int, convert: bool = True) -> Iterator[tuple[int, np.ndarray | None, str | None]]:
+    def read(self, start: int, stop: int | None, step: int) -> Iterator[tuple[int, np.ndarray | None, str | None]]:
         """Yield ``(index, image, None)`` for index in range(start, stop, step), up to a last
-        ``(index, None, problem)`` if the source breaks off at ``index``; with ``convert``
-        False, ``image`` may be a function that gives it (a video's frame, converted then)."""
+        ``(index, None, problem)`` if the source breaks off at ``index``."""
 
     def close(self) -> None:
         """Release open files."""
@@ -263,7 +236,7 @@ class _VideoReader(_Reader):
         self.span = (0.0, 255.0) if self._format == "bgr24" else (0.0, 65535.0)
         self._used = False
 
-    def read(self, start, stop, step, convert=True):
+    def read(self, start, stop, step):
         # Each pass decodes from a fresh container: seeking back is not exact in every format.
         if self._used or self._container is None:
             self.close()
@@ -279,8 +252,7 @@ class _VideoReader(_Reader):
                 if stop is not None and index >= stop:
                     return
                 if index >= start and (index - start) % step == 0:
-                    image = functools.partial(frame.to_ndarray, format=self._format)
-                    yield index, image() if convert else image, None
+                    yield index, frame.to_ndarray(format=self._format), None
                 index += 1
         except av.FFmpegError as error:
             if index == 0:
@@ -318,7 +290,7 @@ class _ImageListReader(_Reader):
         self.fps = DEFAULT_IMAGE_FPS
         self.size = (first.shape[1], first.shape[0])
 
-    def read(self, start, stop, step, convert=True):
+    def read(self, start, stop, step):
         for index in range(start, len(self._files) if stop is None else stop, step):
             image = _as_frame(_read_image(self._files[index]))
             problem = _image_problem(image, self.size, self._dtype, self._files[index].name)
@@ -349,7 +321,7 @@ class _TiffReader(_Reader):
         ok, pages = cv2.imreadmulti(str(self.path), index, 1, flags=cv2.IMREAD_UNCHANGED)
         return pages[0] if ok and pages else None
 
-    def read(self, start, stop, step, convert=True):
+    def read(self, start, stop, step):
         for index in range(start, self.length if stop is None else stop, step):
             image = _as_frame(self._page(index))
             problem = _image_problem(image, self.size, self._dtype, f"page {index}")

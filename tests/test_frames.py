@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import cv2
 import numpy as np
 import pytest
@@ -62,17 +60,6 @@ def test_iterating_twice_gives_the_same_frames(clip):
         second = list(source)
     assert [i for i, _ in first] == [i for i, _ in second] == [0, 4, 8]
     assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(first, second))
-
-
-def test_unconverted_frames_held_together_convert_to_the_frames_read_in_turn(clip):
-    # All held before any is converted, and converted in another thread, as `run`'s overlay does.
-    with open_frames(clip, step=2) as source:
-        read = [(index, image.copy()) for index, image in source]
-        held = list(source.unconverted())
-        with ThreadPoolExecutor(1) as pool:
-            converted = list(pool.map(lambda frame: (frame[0], frame[1]()), held))
-    assert [index for index, _ in converted] == [index for index, _ in read] == [0, 2, 4, 6, 8]
-    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(read, converted))
 
 
 def test_truncated_video_yields_what_decodes_and_records_where_it_stopped(tmp_path):
