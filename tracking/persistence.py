@@ -96,6 +96,12 @@ class MotionStatistics:
     sudden: float = 0.0
     density: float | None = None
 
+    @property
+    def weighs_sudden_changes(self) -> bool:
+        """Whether links to sudden velocity changes are weighed against a miss: some were
+        measured, and so were the miss chance and the point density they are set against."""
+        return self.sudden > 0 and self.missed is not None and bool(self.density)
+
     def describe(self) -> str:
         """One line for the user."""
         # With little velocity kept, its turning is noise and says nothing.
@@ -415,7 +421,7 @@ class PersistentModel:
         # from a slave wins a point at the same distance from two heads, and two tracks take
         # turns at one walker by the view's edge.
         squared = squared / variance
-        if s.sudden > 0 and s.missed is not None and s.density:
+        if s.weighs_sudden_changes:
             # A sudden change: any velocity no faster than the last (a bounce off a wall reverses
             # a component and, where the wall stops it, shortens the step: many sigmas of the
             # smooth model; without this its head took slaves and ran on while a new track
@@ -447,7 +453,7 @@ class PersistentModel:
         about = speed + drift
         moving = drift + s.persistence * about + self.gate * np.sqrt(s.noise**2 + s.relative**2 * about**2)
         still = drift + self.gate * np.sqrt(s.spread**2 + s.noise**2)
-        if s.sudden > 0 and s.missed is not None and s.density:
+        if s.weighs_sudden_changes:
             # A sudden change to any velocity up to the last speed and a sigma, plus fewer
             # sigmas than the gate's beyond it (its chance is weighed against a miss's, above).
             moving = np.maximum(moving, drift + about + (1.0 + self.gate) * np.sqrt(s.noise**2 + s.relative**2 * about**2))
