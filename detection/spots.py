@@ -382,7 +382,10 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
 
     The scale-normalised Laplacian of Gaussian of a Gaussian spot of sigma s peaks at scale s;
     at each of the strongest maxima over position and scale, the Hessian's two eigenvalues give
-    the spot's elongation.
+    the spot's elongation. The strongest are those that stand furthest out of the noise at
+    their scale (the response over its spread over the frame at that scale, measured): pixel
+    noise makes the largest normalised responses at the smallest scales, so that faint spots'
+    own responses would be outvoted by the noise's.
 
     Parameters
     ----------
@@ -406,7 +409,7 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
     smoothed = [cv2.GaussianBlur(signal, (0, 0), float(sigma), borderType=cv2.BORDER_REFLECT) for sigma in _SIZE_SIGMAS]
     stack = np.stack([-(sigma**2) * cv2.Laplacian(image, cv2.CV_32F, ksize=1) for sigma, image in zip(_SIZE_SIGMAS, smoothed)])
-    best = stack.max(axis=0)
+    best = (stack / _response_spread(stack, roi)[:, None, None]).max(axis=0)
     if roi is not None:
         best = np.where(roi > 0, best, 0)
     peaks = (best == cv2.dilate(best, np.ones((5, 5), np.uint8))) & (best > 0)
@@ -434,6 +437,20 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
         ratios[here] = np.where(along > 0, across / np.maximum(along, 1e-12), np.inf)
     sigma = float(np.median(_SIZE_SIGMAS[level]))
     return SpotShape(sigma, _weighted_median(ratios, response[strongest]), max(3, 2 * int(round(3 * sigma)) + 1))
+
+
+def _response_spread(stack: np.ndarray, roi: np.ndarray | None) -> np.ndarray:
+    """Each scale's spread of responses over the frame (median absolute deviation as a standard
+    deviation, on every other pixel each way): the noise's, as spots cover little of a frame.
+    All ones where a scale shows none (a frame without noise), so that its responses are taken
+    as they are."""
+    sample = stack[:, ::2, ::2]
+    values = sample[:, roi[::2, ::2] > 0] if roi is not None else sample.reshape(len(stack), -1)
+    if values.shape[1] == 0:
+        return np.ones(len(stack), np.float32)
+    centre = np.median(values, axis=1)
+    spread = _MAD_TO_SIGMA * np.median(np.abs(values - centre[:, None]), axis=1)
+    return spread.astype(np.float32) if np.all(spread > 0) else np.ones(len(stack), np.float32)
 
 
 def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
