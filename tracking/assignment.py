@@ -11,7 +11,6 @@ than with the square of the frame.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import min_weight_full_bipartite_matching
 
@@ -71,6 +70,10 @@ def solve_dense(
     ndarray of int, shape (m,)
         For each head, the index of its measurement, or ``UNASSIGNED`` (-1) for a slave.
     """
+    # scipy.optimize loads all of its solvers (about 0.1 s of run's imports on a quiet machine):
+    # paid here, by the dense solver, not by every tracker's import.
+    from scipy.optimize import linear_sum_assignment
+
     matrix = augmented_matrix(n_heads, n_measurements, head, measurement, weight, unmatched_weight, corner_weight)
     rows, columns = linear_sum_assignment(matrix)
     result = np.full(n_heads, UNASSIGNED, dtype=np.int64)
