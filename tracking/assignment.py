@@ -70,7 +70,7 @@ def solve_dense(
     ndarray of int, shape (m,)
         For each head, the index of its measurement, or ``UNASSIGNED`` (-1) for a slave.
     """
-    # scipy.optimize loads all of its solvers (about 0.1 s of run's imports on a quiet machine):
+    # scipy.optimize loads all of its solvers (a seventh of run's imports):
     # paid here, by the dense solver, not by every tracker's import.
     from scipy.optimize import linear_sum_assignment
 

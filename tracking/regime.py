@@ -405,7 +405,7 @@ def step_sigma(lengths: np.ndarray, reach: np.ndarray) -> float:
         terms += kept
         return float(np.sum(terms))
 
-    # Imported when used (random walks only): scipy.optimize's import is about 0.1 s of run's.
+    # Imported when used (random walks only): scipy.optimize is a seventh of run's imports.
     from scipy.optimize import minimize_scalar
 
     rms = float(np.sqrt(np.mean(squared) / 2.0)) or 1e-6
