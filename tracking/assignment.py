@@ -195,11 +195,11 @@ def solve_sparse(
     # solver needs non-zero weights.
     values = values + (1.0 - values.min())
     size = n_heads + n_measurements
-    # Built in CSR's canonical order (no pair twice), the matrix scipy would make of (row, column)
-    # triplets, without the conversion's checks and copies.
+    # Built in CSR's canonical order (no pair twice) with the solver's 32-bit indices, the matrix
+    # scipy would make of (row, column) triplets, without the conversion's checks and copies.
     order = np.lexsort((columns, rows))
-    start = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=size))))
-    matrix = csr_matrix((values[order], columns[order], start), shape=(size, size))
+    start = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=size)))).astype(np.int32)
+    matrix = csr_matrix((values[order], columns[order].astype(np.int32), start), shape=(size, size))
     _, column = min_weight_full_bipartite_matching(matrix)
     column = column[:n_heads]
     return np.where(column < n_measurements, column, UNASSIGNED).astype(np.int64)
