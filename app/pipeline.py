@@ -11,7 +11,9 @@ clip's length does not bound what can be processed.
 from __future__ import annotations
 
 import functools
+import importlib
 import sys
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -277,6 +279,9 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
     finished; an output folder made here and still empty is removed again.
     """
     with output_folder(out):
+        # pandas, which writes the tables (a third of run's imports), loads in a thread beside
+        # detection, whose threads leave part of a core free, rather than alone on one core.
+        threading.Thread(target=importlib.import_module, args=("pandas",), daemon=True).start()
         found = detect_clip(clip, detection, workers=workers)
         detections = found.detections
         rows = detections.to_rows()

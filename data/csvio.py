@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 import numpy as np
-import pandas as pd
 
 from .atomic import atomic_path
 from .errors import DataError, check_file, warn
@@ -62,6 +61,10 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
     check_table_name(path)
     columns = {name: np.asarray(values) for name, values in columns.items()}
     rows = lengths.pop() if lengths else 0
+    # Imported when a table is written or read, not with this module: `seedtrack run` loads it
+    # beside detection (see seedtrack.pipeline.run_pipeline).
+    import pandas as pd
+
     with atomic_path(path) as temporary, open(temporary, "w", encoding="utf-8", newline="") as out:
         # A block of rows at a time: a table of all of them is a copy of every column, on a
         # million rows 40 MB of the peak of seedtrack track. Each row's text does not depend on
@@ -176,6 +179,8 @@ def read_table(
                     break
         raise DataError(path, f"missing column(s) {', '.join(missing)}; found {', '.join(header)}{separator}")
     text = [name for name in header if others_as_text and name not in required and name not in integer]
+    import pandas as pd
+
     try:
         frame = pd.read_csv(
             path,
@@ -225,6 +230,8 @@ def _parser_problem(error: Exception, fields: int) -> str:
 
 
 def _numeric_column(path: Path, name: str, values: "pd.Series", required: bool, integer: bool, lines: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    import pandas as pd
+
     numbers = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
     unparsed = _text(values)
     if unparsed.any() and not (required or integer):
@@ -248,6 +255,8 @@ def _text(values: "pd.Series") -> np.ndarray:
     written are numbers here, so that a numeric column with blanks stays numeric."""
     if values.dtype.kind in "iuf":
         return np.zeros(len(values), bool)
+    import pandas as pd
+
     written = values.astype(object).where(values.notna(), "").astype(str).str.strip()
     return (pd.to_numeric(written.where(written != "", "nan"), errors="coerce").isna() & ~written.str.lower().isin(NAN_WORDS)).to_numpy()
 

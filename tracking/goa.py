@@ -19,6 +19,7 @@ are parts the driver is given; without them it is the paper's fixed-count GOA-up
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 from typing import Callable, Protocol, Sequence
 
@@ -218,9 +219,9 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
         bounded = alive[np.isfinite(limit[alive])]
         if bounded.size:
             found = tree.query_ball_point(state.last_xy[bounded], limit[bounded] * gap[bounded])
-            counts = np.fromiter((len(f) for f in found), dtype=np.int64, count=bounded.size)
+            counts = np.fromiter(map(len, found), dtype=np.int64, count=bounded.size)
             heads.append(np.repeat(bounded, counts))
-            measurements.append(np.fromiter((j for f in found for j in f), dtype=np.int64, count=counts.sum()))
+            measurements.append(np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=counts.sum()))
         unbounded = alive[~np.isfinite(limit[alive])]
         if unbounded.size:
             heads_u, measurements_u = _unbounded_pairs(tree, state.last_xy[unbounded], points.shape[0], config)

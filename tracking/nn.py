@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .assignment import UNASSIGNED, solve_split
 from .initialisation import pairs_within
@@ -36,6 +35,9 @@ def link_nearest(before: np.ndarray, after: np.ndarray, d_max: float | None) -> 
         return np.empty(0, np.int64), np.empty(0, np.int64)
     distance = np.hypot(before[:, None, 0] - after[None, :, 0], before[:, None, 1] - after[None, :, 1])
     if d_max is None:
+        # Imported when used: scipy.optimize is a seventh of run's imports, and run needs none of it.
+        from scipy.optimize import linear_sum_assignment
+
         rows, columns = linear_sum_assignment(distance)
         return rows.astype(np.int64), columns.astype(np.int64)
     # Within d_max, leaving both ends of a link unmatched (d_max each) always costs more than

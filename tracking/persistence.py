@@ -16,6 +16,7 @@ with the spread of all measured velocities.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -338,11 +339,23 @@ def _predicted(about: np.ndarray, gap: np.ndarray, span: np.ndarray, persistence
     the mean over k = 1..g of (persistence e^(i turn))^k."""
     if about.shape[0] == 0:
         return about
-    pairs, index = np.unique(np.column_stack((gap, span)), axis=0, return_inverse=True)
-    step = persistence * np.exp(1j * turn)
-    factor = np.array([np.mean(step ** np.arange(1, g + 1)) * np.exp(0.5j * (m - 1) * turn) for g, m in pairs])[index.ravel()]
-    turned = (about[:, 0] + 1j * about[:, 1]) * factor
+    # The (gap, span) pairs as one number each, looked up in a table of the few present: np.unique
+    # over rows cost more than the rest of the prediction.
+    wide = span.max() + 1
+    key = gap * wide + span
+    present = np.flatnonzero(np.bincount(key))
+    table = np.empty(present[-1] + 1, complex)
+    table[present] = [_carried(persistence, turn, g, m) for g, m in zip(present // wide, present % wide)]
+    turned = (about[:, 0] + 1j * about[:, 1]) * table[key]
     return np.column_stack((turned.real, turned.imag))
+
+
+@functools.lru_cache(maxsize=1024)
+def _carried(persistence: float, turn: float, gap: int, span: int) -> complex:
+    """:func:`_predicted`'s factor for one gap and span (frames), asked for at every step of a
+    pass with the same few arguments."""
+    step = persistence * np.exp(1j * turn)
+    return np.mean(step ** np.arange(1, gap + 1)) * np.exp(0.5j * (span - 1) * turn)
 
 
 def _non_negative_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -412,8 +425,9 @@ class PersistentModel:
         variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
         squared = np.full(known.shape, np.inf)
         span = np.ones(gap.shape, np.int64) if candidates.previous_span is None else candidates.previous_span
+        moved = candidates.velocity - drift
         for turn in {s.turn, -s.turn}:
-            residual = candidates.velocity - drift - _predicted(about, candidates.gap, span, s.persistence, turn)
+            residual = moved - _predicted(about, candidates.gap, span, s.persistence, turn)
             squared = np.minimum(squared, np.einsum("ij,ij->i", residual, residual))
         # The measurement is a position: its density across a gap is spread over the g^2 growth
         # times larger variance of the displacement, which a link over one frame does not pay
@@ -431,7 +445,7 @@ class PersistentModel:
             # (the measured point density): such a link costs phi_max, as a slave does, where the
             # two are as likely, less where the change is likelier.
             reach = np.sqrt(speed2) + np.sqrt(variance)
-            away = np.hypot(*(candidates.velocity - drift).T)
+            away = np.hypot(*moved.T)
             turned = np.maximum(away - reach, 0.0) ** 2 / variance + 2.0 * np.log(np.pi * reach**2)
             turned += self.gate**2 - 2.0 * np.log(s.sudden / (s.missed * s.density))
             squared = np.where(known, np.minimum(squared, np.maximum(turned, 0.0)), squared)

@@ -21,7 +21,6 @@ from dataclasses import dataclass, replace
 from typing import Callable, Iterator, NamedTuple, Sequence
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 from .goa import GOAConfig
@@ -405,6 +404,9 @@ def step_sigma(lengths: np.ndarray, reach: np.ndarray) -> float:
         terms += np.log(variance)
         terms += kept
         return float(np.sum(terms))
+
+    # Imported when used (random walks only): scipy.optimize is a seventh of run's imports.
+    from scipy.optimize import minimize_scalar
 
     rms = float(np.sqrt(np.mean(squared) / 2.0)) or 1e-6
     high = float(np.sqrt(bound.max()))
