@@ -386,10 +386,11 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
 
     The scale-normalised Laplacian of Gaussian of a Gaussian spot of sigma s peaks at scale s
     (read between the scales of a grid by a parabola over log-scale); at each of the strongest
-    maxima over position and scale, the Hessian's two eigenvalues give the spot's elongation. The strongest are those that stand furthest out of the noise at
-    their scale (the response over its spread over the frame at that scale, measured): pixel
-    noise makes the largest normalised responses at the smallest scales, so that faint spots'
-    own responses would be outvoted by the noise's.
+    maxima over position and scale, the Hessian's two eigenvalues give the spot's elongation.
+    The strongest are those that stand furthest out of the noise at their scale (the response
+    over its spread over the frame at that scale, measured): pixel noise makes the largest
+    normalised responses at the smallest scales, so that faint spots' own responses would be
+    outvoted by the noise's.
 
     Parameters
     ----------
@@ -406,7 +407,7 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
     Example
     -------
     >>> rows, columns = np.mgrid[0:64, 0:64]
-    >>> spot = 50 * np.exp(-((columns - 31.0) ** 2 + (rows - 30.0) ** 2) / (2 * 2.2**2))
+    >>> spot = 50 * np.exp(-((columns - 31.0) ** 2 + (rows - 30.0) ** 2) / (2 * 2.0**2))
     >>> spot_shape(spot.astype(np.float32)).diameter
     13
     """
