@@ -75,6 +75,10 @@ _PREFILTER = 0.5
 # Scales (Gaussian sigma, pixels) among which the spot size is looked for; at most this many of
 # the strongest maxima vote.
 _SIZE_SIGMAS = np.array([0.8, 1.0, 1.25, 1.6, 2.0, 2.5, 3.2, 4.0, 5.0])
+# The 5-point Laplacian is the Laplacian plus a twelfth of each fourth derivative, which at a
+# Gaussian's centre is the Laplacian of that Gaussian widened by 1/8 px^2 of variance: the
+# responses are normalised by the scale it works at, else small spots read wide (1.0 as 1.09).
+_STENCIL_VARIANCE = 1 / 8
 _SIZE_VOTERS = 200
 # Median absolute deviation of a normal distribution, in standard deviations.
 _MAD_TO_SIGMA = 1.4826
@@ -380,12 +384,13 @@ class SpotShape:
 def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None = None) -> SpotShape:
     """Size and shape of the strongest spots, from the scale space of the frame.
 
-    The scale-normalised Laplacian of Gaussian of a Gaussian spot of sigma s peaks at scale s;
-    at each of the strongest maxima over position and scale, the Hessian's two eigenvalues give
-    the spot's elongation. The strongest are those that stand furthest out of the noise at
-    their scale (the response over its spread over the frame at that scale, measured): pixel
-    noise makes the largest normalised responses at the smallest scales, so that faint spots'
-    own responses would be outvoted by the noise's.
+    The scale-normalised Laplacian of Gaussian of a Gaussian spot of sigma s peaks at scale s
+    (read between the scales of a grid by a parabola over log-scale); at each of the strongest
+    maxima over position and scale, the Hessian's two eigenvalues give the spot's elongation.
+    The strongest are those that stand furthest out of the noise at their scale (the response
+    over its spread over the frame at that scale, measured): pixel noise makes the largest
+    normalised responses at the smallest scales, so that faint spots' own responses would be
+    outvoted by the noise's.
 
     Parameters
     ----------
@@ -408,7 +413,7 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
     """
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
     smoothed = [cv2.GaussianBlur(signal, (0, 0), float(sigma), borderType=cv2.BORDER_REFLECT) for sigma in _SIZE_SIGMAS]
-    stack = np.stack([-(sigma**2) * cv2.Laplacian(image, cv2.CV_32F, ksize=1) for sigma, image in zip(_SIZE_SIGMAS, smoothed)])
+    stack = np.stack([-(sigma**2 + _STENCIL_VARIANCE) * cv2.Laplacian(image, cv2.CV_32F, ksize=1) for sigma, image in zip(_SIZE_SIGMAS, smoothed)])
     best = (stack / _response_spread(stack, roi)[:, None, None]).max(axis=0)
     if roi is not None:
         best = np.where(roi > 0, best, 0)
@@ -435,8 +440,29 @@ def spot_shape(gray: np.ndarray, polarity: str = "light", roi: np.ndarray | None
         # A bright spot curves down both ways: across is the stronger curvature.
         across, along = -((hxx + hyy) / 2 - half_gap), -((hxx + hyy) / 2 + half_gap)
         ratios[here] = np.where(along > 0, across / np.maximum(along, 1e-12), np.inf)
-    sigma = float(np.median(_SIZE_SIGMAS[level]))
-    return SpotShape(sigma, _weighted_median(ratios, response[strongest]), max(3, 2 * int(round(3 * sigma)) + 1))
+    sigma = float(np.median(_peak_scale(stack[:, rows, columns], level)))
+    return SpotShape(sigma, _weighted_median(ratios, response[strongest]), max(3, 2 * int(np.floor(3 * sigma + 0.5)) + 1))
+
+
+def _peak_scale(responses: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """Each column's scale of greatest response, between the grid's scales: the vertex of the
+    parabola through the responses at the best scale and its two neighbours, over log-scale (a
+    Gaussian spot's normalised response is symmetric in log-scale about its sigma). At the
+    grid's ends, the end's scale."""
+    u = np.log(_SIZE_SIGMAS)
+    sigma = _SIZE_SIGMAS[level].astype(float)
+    inner = (level > 0) & (level < len(u) - 1)
+    k = level[inner]
+    columns = np.nonzero(inner)[0]
+    x0, x1, x2 = u[k - 1], u[k], u[k + 1]
+    y0, y1, y2 = (responses[k + d, columns].astype(float) for d in (-1, 0, 1))
+    # The parabola's coefficients of u^2 and u, both times (x0 - x1)(x0 - x2)(x1 - x2) < 0, so
+    # that it opens downwards where ``bend`` > 0.
+    bend = x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)
+    slope = x2**2 * (y0 - y1) + x1**2 * (y2 - y0) + x0**2 * (y1 - y2)
+    vertex = np.where(bend > 0, -slope / (2 * np.where(bend > 0, bend, 1.0)), x1)
+    sigma[inner] = np.exp(np.clip(vertex, x0, x2))
+    return sigma
 
 
 def _response_spread(stack: np.ndarray, roi: np.ndarray | None) -> np.ndarray:

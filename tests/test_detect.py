@@ -180,9 +180,9 @@ def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, c
     folder = write_spot_frames(tmp_path / "frames")
     assert main(["detect", str(folder), "--out", str(tmp_path / "d.csv"), "--preview", str(tmp_path / "p.png")]) == 0
     first = capsys.readouterr().out.splitlines()[0]
-    assert first.startswith("detector: small round spots") and "diameter 11 px" in first
+    assert first.startswith("detector: small round spots") and "diameter 9 px" in first
     found = detect_clip(folder, say=lambda line: None)
-    assert preview_caption(found.choice, DetectionSettings()).startswith("spot detector: diameter 11 px, least mass")
+    assert preview_caption(found.choice, DetectionSettings()).startswith("spot detector: diameter 9 px, least mass")
     assert preview_caption(choose_detector(np.zeros((8, 8)), "dark", detector="blob"), DetectionSettings()) == (
         "blob detector: threshold otsu, area 4 px and up"
     )

@@ -94,6 +94,13 @@ def test_spot_size_is_estimated_from_the_image():
     assert spot_shape(gaussians([(30.0, 30.0), (70.0, 50.0)], sigma=2.0)).diameter == 13
 
 
+@pytest.mark.parametrize("sigma", [1.0, 1.5, 2.2, 3.0])
+def test_spot_sigma_is_read_between_the_scales_of_the_grid(sigma):
+    # Read on the grid of scales alone, 1.5 said 1.6, 2.2 said 2.5 and 3.0 said 3.2.
+    field = make_spot_field(SpotFieldSpec(width=256, height=256, spots=30, touching_pairs=0, rings=0, sigma=sigma, snr=50.0, random_seed=3))
+    assert spot_shape(field.image).sigma == pytest.approx(sigma, rel=0.05)
+
+
 def test_faint_spots_are_sized_by_their_own_light_not_the_noise():
     # At SNR 2 pixel noise makes the largest scale-normalised responses, at the smallest scale:
     # taken as they are they said sigma 0.8 (diameter 5) for spots of 1.5, and kept 42% of them.
