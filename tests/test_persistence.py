@@ -294,15 +294,14 @@ def test_seeds_missed_often_keep_their_tracks_on_a_dish(hidden, most_wrong):
     assert scores.true_tracks - scores.correct_tracks <= most_wrong and scores.link_error < 0.03
 
 
-def test_a_return_pays_the_chance_that_its_track_is_gone_not_each_miss():
-    # With 10% of points missed and 0.5% of tracks ending a frame, a head back after one missed
-    # frame is almost surely its point's (it pays 0.1, not -2 ln 0.1 = 4.6), after three it is
-    # more likely gone; with no end rate measured each miss pays the miss chance.
+def test_a_track_missed_a_frame_or_two_is_likelier_there_than_gone():
+    # With 10% of points missed and 0.5% of tracks ending a frame, a track missed in its last
+    # frame is almost surely there, after three misses more likely gone; with no end rate
+    # measured, the chance is the miss chance's power.
     walk = MotionStatistics(0.0, 1.0, 0.0, (0.0, 0.0), 1.0, 100, missed=0.1, ended=0.005)
-    cost = walk.miss_cost(np.array([1, 2, 3, 4]))
-    assert cost[0] == 0.0 and cost[1] < 0.2 < cost[2] < cost[3]
-    assert cost[1] < -2 * np.log(0.1) and cost[3] > 2 * np.log(2)
-    assert np.allclose(replace(walk, ended=None).miss_cost(np.array([1, 3])), [0.0, -4 * np.log(0.1)])
+    there = walk.chance_there(np.array([0, 1, 2, 3]))
+    assert there[0] == 1.0 and there[1] > 0.9 and there[3] < 0.5 and np.all(np.diff(there) < 0)
+    assert np.allclose(replace(walk, ended=None).chance_there(np.array([0, 2])), [1.0, 0.01])
     assert PersistentModel(walk).likely_there(np.array([0, 2, 3])).tolist() == [True, True, False]
 
 

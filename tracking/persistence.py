@@ -72,8 +72,7 @@ class MotionStatistics:
         with the speed). None: both are ``noise`` and ``relative``.
     missed : float or None
         Chance that a tracked point is missed in a frame, measured on the tracks (their filled-in
-        share); a link across missed frames pays for the chance that the track is still there
-        (:meth:`miss_cost`). None: gaps pay nothing for it.
+        share); a link across missed frames pays for each. None: gaps pay nothing for it.
     sudden : float
         Share of velocity changes the smooth model does not explain beyond its own Gaussian tail
         (bounces off a wall, collisions, a first pass's wrong links).
@@ -83,8 +82,8 @@ class MotionStatistics:
         :meth:`PersistentModel.cost`). None: no such links.
     ended : float or None
         Chance that a track ends in a frame (its point gone for good: out of view, out of focus,
-        or a first pass's track that lost its point), measured on the tracks. None: every miss
-        pays the miss chance (see :meth:`miss_cost`).
+        or a first pass's track that lost its point), measured on the tracks. With ``missed`` it
+        tells a track missed for a few frames from one gone (:meth:`chance_there`).
     """
 
     persistence: float
@@ -109,27 +108,25 @@ class MotionStatistics:
         # (g + 1)(2g + 1) / 6g times more (its velocity errors add up); persistence weighs the two.
         return (1.0 - self.persistence) / gap + self.persistence * (gap + 1.0) * (2.0 * gap + 1.0) / (6.0 * gap)
 
-    def miss_cost(self, gap: np.ndarray) -> np.ndarray:
-        """Twice the negative log chance that a track whose last ``gap - 1`` frames were missed
-        is still there (its point missed, not gone), given the measured miss chance and the
-        chance ``ended`` that a track ends in a frame; without ``ended``, twice the negative log
-        of the miss chance per missed frame; 0 without a miss chance.
+    def chance_there(self, missed: np.ndarray) -> np.ndarray:
+        """Chance that a track whose point was missed in its last ``missed`` frames is still
+        there (its point missed, not gone), from the measured miss chance and the chance
+        ``ended`` that a track ends in a frame; without ``ended``, the miss chance to that power.
 
         Example
         -------
         >>> stats = MotionStatistics(0.0, 1.5, 0.0, (0.0, 0.0), 1.5, 100, missed=0.1, ended=0.005)
-        >>> stats.miss_cost(np.array([1, 2, 3])).round(2).tolist()
-        [0.0, 0.1, 0.88]
+        >>> stats.chance_there(np.array([0, 1, 2, 3])).round(2).tolist()
+        [1.0, 0.95, 0.64, 0.15]
         """
-        gap = np.asarray(gap, dtype=float)
+        missed = np.asarray(missed, dtype=float)
         if self.missed is None:
-            return np.zeros(gap.shape)
+            return np.ones(missed.shape)
         if self.ended is None:
-            return -2.0 * (gap - 1.0) * np.log(self.missed)
+            return self.missed**missed
         kept = (1.0 - self.ended) * self.missed
-        seen_out = kept ** (gap - 1.0)
-        gone = self.ended * (1.0 - seen_out) / (1.0 - kept)
-        return 2.0 * np.log1p(gone / seen_out)
+        there = kept**missed
+        return there / (there + self.ended * (1.0 - there) / (1.0 - kept))
 
     @property
     def weighs_sudden_changes(self) -> bool:
@@ -474,19 +471,20 @@ class PersistentModel:
             turned += self.gate**2 - 2.0 * np.log(s.sudden / (s.missed * s.density))
             squared = np.where(known, np.minimum(squared, np.maximum(turned, 0.0)), squared)
         spread = 2.0 * np.log(gap * gap * growth)
-        # A head back from slaves pays for the chance that its point is gone rather than missed:
-        # where no point is ever missed, heads on slaves took walkers' points (sigma 3, tuning
-        # seeds 0-11: 12 of the 61 links only seedtrack got wrong against trackpy, 5 with a
-        # charge). The misses themselves are not charged: the head's were in the frames before,
-        # whatever it takes now, and charged -2 ln(missed) each, a head back after one missed
-        # frame lost its point to a neighbour whose own point was missed now (Brownian points
-        # 10% missed, tuning seeds 0-9: strict merit 0.574 with that charge, 0.586 with this).
-        spread += s.miss_cost(gap)
+        # Each missed frame is a miss of the measured chance: a head back from slaves pays for
+        # them against heads that missed nothing. Without it tracks on slaves took walkers'
+        # points where no point is ever missed (sigma 3, tuning seeds 0-11: 12 of the 61 links
+        # only seedtrack got wrong against trackpy, 5 with it). Charging instead only the chance
+        # that the track is gone (-2 ln chance_there) gained on Brownian points 10% missed
+        # (strict merit 0.568 -> 0.581, tuning seeds 0-9) but lost on generated beads with
+        # satellites (bench_beads.py, link error 0.0291 -> 0.0320).
+        if s.missed is not None:
+            spread -= 2.0 * (gap - 1.0) * np.log(s.missed)
         return phi_max * (squared + spread) / self.gate**2
 
     def likely_there(self, missed: np.ndarray) -> np.ndarray:
         """Boolean per head: after ``missed`` frames in a row without its point, the point is
-        more likely missed than gone (:meth:`MotionStatistics.miss_cost` below 2 ln 2).
+        more likely missed than gone (:meth:`MotionStatistics.chance_there` above 1/2).
 
         Example
         -------
@@ -494,7 +492,7 @@ class PersistentModel:
         >>> PersistentModel(stats).likely_there(np.array([0, 1, 2, 3])).tolist()
         [True, True, True, False]
         """
-        return self.statistics.miss_cost(np.asarray(missed) + 1.0) < 2.0 * np.log(2.0)
+        return self.statistics.chance_there(missed) > 0.5
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can cost under phi_max, pixels/frame."""
