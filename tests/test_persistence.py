@@ -292,3 +292,36 @@ def test_seeds_missed_often_keep_their_tracks_on_a_dish(hidden, most_wrong):
     tracks = track_measured_motion(scene.visible_points(), GOAConfig(), _open)[0]
     scores = score_tracks(tracks, scene.truth, tolerance=0.5)
     assert scores.true_tracks - scores.correct_tracks <= most_wrong and scores.link_error < 0.03
+
+
+def test_a_track_missed_a_frame_or_two_is_likelier_there_than_gone():
+    # With 10% of points missed and 0.5% of tracks ending a frame, a track missed in its last
+    # frame is almost surely there, after three misses more likely gone; with no end rate
+    # measured, the chance is the miss chance's power.
+    walk = MotionStatistics(0.0, 1.0, 0.0, (0.0, 0.0), 1.0, 100, missed=0.1, ended=0.005)
+    there = walk.chance_there(np.array([0, 1, 2, 3]))
+    assert there[0] == 1.0 and there[1] > 0.9 and there[3] < 0.5 and np.all(np.diff(there) < 0)
+    assert np.allclose(replace(walk, ended=None).chance_there(np.array([0, 2])), [1.0, 0.01])
+    assert PersistentModel(walk).likely_there(np.array([0, 2, 3])).tolist() == [True, True, False]
+
+
+def test_the_chance_that_a_track_ends_is_measured_on_the_tracks():
+    # 6 tracks of 10 frames, one ending 3 frames early: 1 end in 57 points (Laplace: 2 / 59).
+    rng = np.random.default_rng(5)
+    xy = np.cumsum(rng.normal(0, 1, (6, 10, 2)), axis=1) + np.arange(6)[:, None, None] * [50.0, 0.0]
+    index = np.zeros((6, 10), np.int64)
+    xy[2, 7:] = np.nan
+    index[2, 7:] = NO_MEASUREMENT
+    assert measured_chains(Tracks.from_dense(xy, index)).ended == pytest.approx(2 / 59)
+
+
+def test_an_exchange_after_a_missed_frame_weighs_the_link_across_it():
+    # Walker a is missed in frame 3. Exchanging the tails from frame 4 on would shorten b's step
+    # into frame 4 but leave a a long link across the gap, which the window now weighs.
+    walk = MotionStatistics(0.0, 1.0, 0.0, (0.0, 0.0), 1.0, 100)
+    a = np.array([[0.0, 0.0], [0.3, 0.2], [0.1, 0.4], [np.nan, np.nan], [0.9, 0.6], [1.0, 0.3], [0.8, 0.5]])
+    b = np.array([[3.0, 0.0], [2.8, 0.3], [2.5, 0.1], [1.4, 0.2], [3.1, 0.4], [3.0, 0.1], [3.2, 0.2]])
+    index = np.zeros((2, 7), np.int64)
+    index[0, 3] = NO_MEASUREMENT
+    truth = np.stack((a, b))
+    assert np.allclose(resolve_crossings(Tracks.from_dense(truth.copy(), index), walk).xy, truth, equal_nan=True)

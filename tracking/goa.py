@@ -29,6 +29,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
+from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
 Progress = Callable[[int], None]
@@ -382,7 +383,7 @@ def goa_pass(
         Measurement positions per frame, pixels, in processing order.
     initial : ndarray of int, shape (m, w)
         Each head's measurement index in ``frames[0]`` .. ``frames[w - 1]`` (-1 for none; w is 2
-        for first links); with ``end`` each must hold one in ``frames[0]``.
+        for first links); with ``end`` each must hold one in its given columns.
     config : GOAConfig
     progress : callable, optional
         Called with 1 after each frame step (``len(frames) - 1`` calls).
@@ -464,18 +465,28 @@ def _down_start(frames: Sequence[np.ndarray], up: np.ndarray, config: GOAConfig)
     return links
 
 
-def _histories(reversed_up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _histories(reversed_up: np.ndarray, config: GOAConfig, end: TrackEnd | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The down pass's given heads with track start: each up-pass track that holds a
-    measurement in the last frame, up to its second-newest measurement, so that a track whose
-    last frames hold slaves starts the down pass with a velocity (a head with none is gated by
-    the spread of all velocities and, through its slaves, can reach any point).
+    measurement in the last frame, or that ``end`` let run on slaves there while more likely
+    still there than gone (its point missed, not the point gone: a measured model's
+    :meth:`PersistentModel.likely_there`), up to its second-newest measurement, so that a track
+    whose last frames hold slaves starts the down pass with a velocity (a head with none is
+    gated by the spread of all velocities and, through its slaves, can reach any point). Left to
+    open again in the down pass, a track missed in the last frame needs three measured frames in
+    a row, and until then its points are free for a head whose own point is missed to take
+    (Brownian points 10% missed: the down pass opened 10% of its tracks again); given after more
+    slaves than that, a head that had lost its point took other seeds' on a dish 15% missed.
 
     Returns the rows (in reversed frame order) and the columns given of each."""
-    rows = reversed_up[reversed_up[:, 0] != UNASSIGNED]
-    held = rows != UNASSIGNED
+    held = reversed_up != UNASSIGNED
+    trailing = held.argmax(axis=1)
+    running = held.any(axis=1) & (trailing == 0)
+    if end is not None and isinstance(config.individual, PersistentModel):
+        running |= held.any(axis=1) & ~end.ended(trailing) & config.individual.likely_there(trailing)
+    rows, held, trailing = reversed_up[running], held[running], trailing[running]
     second = np.where(held.cumsum(axis=1) == 2, np.arange(rows.shape[1]), rows.shape[1]).min(axis=1)
     # A one-point track is given its point (and the slave after it, as the first links were).
-    given = np.where(second < rows.shape[1], second + 1, 2)
+    given = np.where(second < rows.shape[1], second + 1, trailing + 2)
     return rows[:, : max(int(given.max(initial=2)), 2)], given
 
 
@@ -582,7 +593,7 @@ def goa_updown(
     if start is None:
         initial, given = _down_start(frames, up, config), None
     else:
-        initial, given = _histories(up[:, ::-1])
+        initial, given = _histories(up[:, ::-1], config, end)
     down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
     if gaps is not None:
         down = gaps.fill(frames, down, config)

@@ -81,6 +81,10 @@ class MotionStatistics:
         Measured points per frame per square pixel. With ``sudden`` and ``missed``, a link to any
         velocity no faster than the last is weighed against a miss (see
         :meth:`PersistentModel.cost`). None: no such links.
+    ended : float or None
+        Chance that a track ends in a frame (its point gone for good: out of view, out of focus,
+        or a first pass's track that lost its point), measured on the tracks. With ``missed`` it
+        tells a track missed for a few frames from one gone (:meth:`chance_there`).
     """
 
     persistence: float
@@ -96,6 +100,34 @@ class MotionStatistics:
     missed: float | None = None
     sudden: float = 0.0
     density: float | None = None
+    ended: float | None = None
+
+    def gap_growth(self, gap: np.ndarray) -> np.ndarray:
+        """Factor by which the variance of a velocity averaged over ``gap`` frames (its
+        gap-normalised velocity across missed frames) differs from one frame's."""
+        # A random walk's varies g times less (its steps average out), a velocity random walk's
+        # (g + 1)(2g + 1) / 6g times more (its velocity errors add up); persistence weighs the two.
+        return (1.0 - self.persistence) / gap + self.persistence * (gap + 1.0) * (2.0 * gap + 1.0) / (6.0 * gap)
+
+    def chance_there(self, missed: np.ndarray) -> np.ndarray:
+        """Chance that a track whose point was missed in its last ``missed`` frames is still
+        there (its point missed, not gone), from the measured miss chance and the chance
+        ``ended`` that a track ends in a frame; without ``ended``, the miss chance to that power.
+
+        Example
+        -------
+        >>> stats = MotionStatistics(0.0, 1.5, 0.0, (0.0, 0.0), 1.5, 100, missed=0.1, ended=0.005)
+        >>> stats.chance_there(np.array([0, 1, 2, 3])).round(2).tolist()
+        [1.0, 0.95, 0.64, 0.15]
+        """
+        missed = np.asarray(missed, dtype=float)
+        if self.missed is None:
+            return np.ones(missed.shape)
+        if self.ended is None:
+            return self.missed**missed
+        kept = (1.0 - self.ended) * self.missed
+        there = kept**missed
+        return there / (there + self.ended * (1.0 - there) / (1.0 - kept))
 
     @property
     def weighs_sudden_changes(self) -> bool:
@@ -162,6 +194,7 @@ class Chains:
     spread: float
     missed: float | None = None
     density: float | None = None
+    ended: float | None = None
 
 
 def measured_chains(tracks: Tracks) -> Chains | None:
@@ -183,6 +216,10 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     measured = tracks.point_measurement != NO_MEASUREMENT
     # Laplace's rule on the tracks' points: tracks with no gap at all still leave a chance.
     missed = (np.count_nonzero(tracks.point_interpolated) + 1.0) / (measured.size + 2.0)
+    # Tracks that end before the clip does, per frame a track runs (Laplace's rule as above).
+    last = np.zeros(tracks.n_tracks, np.int64)
+    np.maximum.at(last, tracks.point_track, tracks.point_column)
+    ended = (np.count_nonzero(last < tracks.n_frames - 1) + 1.0) / (measured.size + 2.0)
     seen = tracks.point_xy[measured]
     box = np.prod(np.maximum(np.ptp(seen, axis=0), 1.0)) if seen.size else 1.0
     density = float(seen.shape[0] / (max(tracks.n_frames, 1) * box))
@@ -208,7 +245,7 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     del velocities
     b_all -= drift
     a_all -= drift
-    return Chains(b_all, a_all, drift, spread, missed, density)
+    return Chains(b_all, a_all, drift, spread, missed, density, ended)
 
 
 def fit_chains(chains: Chains) -> MotionStatistics:
@@ -287,6 +324,7 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         chains.missed,
         sudden,
         chains.density,
+        chains.ended,
     )
 
 
@@ -417,11 +455,8 @@ class PersistentModel:
         known = ~np.isnan(previous[:, 0])
         about = np.where(known[:, None], previous - drift, 0.0)
         speed2 = np.einsum("ij,ij->i", about, about)
-        # Across a gap of g frames the gap-normalised velocity of a random walk varies g times less
-        # (its steps average out), that of a velocity random walk (g + 1)(2g + 1) / 6g times more
-        # (its velocity errors add up); persistence weighs the two.
         gap = candidates.gap.astype(float)
-        growth = (1.0 - s.persistence) / gap + s.persistence * (gap + 1.0) * (2.0 * gap + 1.0) / (6.0 * gap)
+        growth = s.gap_growth(gap)
         variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
         squared = np.full(known.shape, np.inf)
         span = np.ones(gap.shape, np.int64) if candidates.previous_span is None else candidates.previous_span
@@ -453,10 +488,25 @@ class PersistentModel:
         # Each missed frame is a miss of the measured chance: a head back from slaves pays for
         # them against heads that missed nothing. Without it tracks on slaves took walkers'
         # points where no point is ever missed (sigma 3, tuning seeds 0-11: 12 of the 61 links
-        # only seedtrack got wrong against trackpy, 5 with it).
+        # only seedtrack got wrong against trackpy, 5 with it). Charging instead only the chance
+        # that the track is gone (-2 ln chance_there) gained on Brownian points 10% missed
+        # (strict merit 0.568 -> 0.581, tuning seeds 0-9) but lost on generated beads with
+        # satellites (bench_beads.py, link error 0.0291 -> 0.0320).
         if s.missed is not None:
             spread -= 2.0 * (gap - 1.0) * np.log(s.missed)
         return phi_max * (squared + spread) / self.gate**2
+
+    def likely_there(self, missed: np.ndarray) -> np.ndarray:
+        """Boolean per head: after ``missed`` frames in a row without its point, the point is
+        more likely missed than gone (:meth:`MotionStatistics.chance_there` above 1/2).
+
+        Example
+        -------
+        >>> stats = MotionStatistics(0.0, 1.5, 0.0, (0.0, 0.0), 1.5, 100, missed=0.1, ended=0.005)
+        >>> PersistentModel(stats).likely_there(np.array([0, 1, 2, 3])).tolist()
+        [True, True, True, False]
+        """
+        return self.statistics.chance_there(missed) > 0.5
 
     def gate_radius(self, speed: np.ndarray, has_history: np.ndarray, phi_max: float) -> np.ndarray:
         """Per-head speed beyond which no candidate can cost under phi_max, pixels/frame."""

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .persistence import GATE, MotionStatistics, _turned
+from .persistence import MotionStatistics, _predicted, _turned
 from .tracks import NO_MEASUREMENT, Tracks
 
 # Frames either side of the encounter whose velocity changes are compared.
@@ -163,11 +163,14 @@ def _pairings(xy, measured, i: np.ndarray, j: np.ndarray, k: int, statistics: Mo
 
 def _window_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> np.ndarray:
     """Negative log-likelihood of the velocity changes of pairs of tracks (P, 2, w, 2) over a
-    window, on triplets of consecutive measured points; a triplet lacking counts as a change at
-    the gate, so that an exchange cannot win by leaving triplets out. A step with no step before
-    it (a track's first, or the window's) is scored as a head with no velocity is, against the
-    drift with the spread of the velocities: otherwise a random walk's first step, which no
-    triplet judges, could be exchanged for free."""
+    window: on triplets of consecutive measured points, on links across missed frames
+    (:func:`_bridge_costs`) and, for a step with no step before
+    it (a track's first, the window's, or the first after a missed frame), against the drift
+    with the spread of the velocities as a head with no velocity is: every link of the window
+    is weighed, so no exchange wins by leaving one out. (A triplet lacking used to count as a
+    change at the gate instead; on Brownian points 10% missed that moved the missed frames of
+    two tracks onto one, taking a neighbour's point across the gap: strict merit on tuning
+    seeds 0-9 0.570 against 0.584 without it.)"""
     step = np.diff(xy, axis=2) - np.asarray(statistics.drift)
     linked = seen[..., 1:] & seen[..., :-1]
     both = linked[..., 1:] & linked[..., :-1]
@@ -175,12 +178,46 @@ def _window_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics
     change = after - statistics.persistence * _turned(before.reshape(-1, 2), statistics.turn).reshape(before.shape)
     with np.errstate(invalid="ignore", divide="ignore"):  # unmeasured positions are NaN, and left out by the masks
         triplets = np.where(both, _change_cost(before, change, statistics), 0.0)
-    lacking = both[0].size - both.sum(axis=(1, 2))
     opening = linked.copy()
     opening[..., 1:] &= ~linked[..., :-1]
     spread2 = statistics.spread**2 + statistics.noise**2
     first = np.where(opening, np.einsum("...i,...i->...", step, step), 0.0).sum(axis=(1, 2))
-    return triplets.sum(axis=(1, 2)) + first / (2.0 * spread2) + opening.sum(axis=(1, 2)) * np.log(spread2) + lacking * GATE**2 / 2.0
+    return (
+        triplets.sum(axis=(1, 2)) + first / (2.0 * spread2) + opening.sum(axis=(1, 2)) * np.log(spread2)
+        + _bridge_costs(xy, seen, statistics)
+    )
+
+
+def _bridge_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics) -> np.ndarray:
+    """Negative log-likelihood, per pair of tracks (P, 2, w, 2), of the links across missed frames
+    in the window, as the final pass weighs them (:meth:`PersistentModel.cost`: the velocity over
+    the gap from the one before it, or from the drift with the spread of the velocities, its
+    variance grown with the gap, the density of a position over g frames g**2 times thinner).
+    Left out, an exchange of tails after a missed point was judged by the other track's link
+    alone, and on Brownian points 10% missed it gave a track whose point was missed its
+    neighbour's (the bridge it left the other track was never weighed)."""
+    s = statistics
+    drift = np.asarray(s.drift)
+    total = np.zeros(xy.shape[0])
+    width = xy.shape[2]
+    for gap in range(2, width):
+        # Measured at j and j + gap, missed in between.
+        bridge = seen[..., : width - gap] & seen[..., gap:]
+        for inner in range(1, gap):
+            bridge &= ~seen[..., inner : width - gap + inner]
+        if not bridge.any():
+            continue
+        pair, track, j = np.nonzero(bridge)
+        velocity = (xy[pair, track, j + gap] - xy[pair, track, j]) / gap - drift
+        known = (j > 0) & seen[pair, track, np.maximum(j - 1, 0)]
+        before = np.where(known[:, None], xy[pair, track, j] - xy[pair, track, np.maximum(j - 1, 0)] - drift, 0.0)
+        growth = s.gap_growth(float(gap))
+        speed2 = np.einsum("ij,ij->i", before, before)
+        variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
+        residual = velocity - _predicted(before, np.full(j.size, gap), np.ones(j.size, np.int64), s.persistence, s.turn)
+        cost = np.einsum("ij,ij->i", residual, residual) / (2.0 * variance) + np.log(variance) + 2.0 * np.log(gap)
+        np.add.at(total, pair, cost)
+    return total
 
 
 def _change_cost(before: np.ndarray, change: np.ndarray, statistics: MotionStatistics) -> np.ndarray:
