@@ -480,7 +480,7 @@ def _histories(reversed_up: np.ndarray, config: GOAConfig, end: TrackEnd | None 
     Returns the rows (in reversed frame order) and the columns given of each."""
     held = reversed_up != UNASSIGNED
     trailing = held.argmax(axis=1)
-    running = held.any(axis=1) & (trailing == 0)
+    running = held[:, 0].copy()
     if end is not None and isinstance(config.individual, PersistentModel):
         running |= held.any(axis=1) & ~end.ended(trailing) & config.individual.likely_there(trailing)
     rows, held, trailing = reversed_up[running], held[running], trailing[running]
