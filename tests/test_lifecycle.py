@@ -14,7 +14,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.frames import open_frames
 from seedtrack.data.psmg import generate_psmg
 from seedtrack.detection.blobs import BlobOptions, detect_blobs
-from seedtrack.tracking.gap_closing import join_track_ends
+from seedtrack.tracking.gap_closing import extend_track_ends, join_track_ends
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short, goa_updown_open
 from seedtrack.tracking.metrics import score_tracks
@@ -258,3 +258,16 @@ def test_a_fast_dish_with_seeds_missed_now_and_then_keeps_most_tracks():
         for corner in ("phi", "zero")
     }
     assert correct["phi"] >= 60 and correct["phi"] >= correct["zero"] + 20, correct
+
+
+@pytest.mark.parametrize("missed, taken", [((3,), [0, 0]), ((3, 4), [-1])])
+def test_a_track_end_takes_a_free_point_across_one_missed_frame_but_not_two(missed, taken):
+    # A point whose next frames are missed is left free when a head comes back to it (no point
+    # continues it); after the passes its track end takes it back, across one missed frame only.
+    frames = [np.array([[10.0 + 2 * k, 10.0]]) for k in range(6)]
+    for k in missed:
+        frames[k] = np.empty((0, 2))
+    assignment = np.full((1, 6), -1)
+    assignment[0, :3] = 0
+    extended = extend_track_ends(frames, assignment, GOAConfig(d_max=5.0))
+    assert extended[0, max(missed) + 1 :].tolist() == taken
