@@ -110,7 +110,7 @@ def pipeline_seconds(clip: Path, workers: int) -> float:
     return float(done.stdout.split()[-1])
 
 
-def pipeline_table(clips: dict[str, Path], repeats: int = 3) -> None:
+def pipeline_table(clips: dict[str, Path], repeats: int = 5) -> None:
     """Decoding alone beside decoding plus detection as ``seedtrack`` runs it, wall clock."""
     print(f"decoding + detection as seedtrack runs it (wall clock, median of {repeats}; load average {os.getloadavg()[0]:.1f}):")
     print("| clip | decoding alone, frames/s | workers | decoding + detection, frames/s | of decoding alone |")
