@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -41,7 +40,7 @@ import trackpy
 from scipy.special import erf
 from skimage.feature import blob_log
 
-from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
+from seedtrack.data.spotfield import SpotField, SpotFieldSpec, make_spot_field
 from seedtrack.detection.spots import detect_spots, fit_spot_settings
 from seedtrack.tracking.metrics import match_frame
 
@@ -59,16 +58,7 @@ SETTINGS = (
 )
 
 
-@dataclass(frozen=True)
-class ErfField:
-    """A frame of :func:`erf_field` and its truth, as :class:`seedtrack.data.spotfield.SpotField`."""
-
-    image: np.ndarray
-    xy: np.ndarray
-    kind: np.ndarray
-
-
-def erf_field(snr: float, seed: int, size: int = 400, spots: int = 150) -> ErfField:
+def erf_field(snr: float, seed: int, size: int = 400, spots: int = 150) -> SpotField:
     """Pixel-integrated Gaussian spots (each pixel gets the PSF's integral over it), sigma
     0.9-1.1 px, at least 8 px apart; Poisson noise on 30 photons, read noise 2 electrons, gain
     2.2 grey levels an electron, offset 400, rounded to 16 bits. SNR as in spotfield: the
@@ -93,7 +83,13 @@ def erf_field(snr: float, seed: int, size: int = 400, spots: int = 150) -> ErfFi
         photons += peak / share * np.outer(down, across)
     electrons = rng.poisson(photons) + rng.normal(0, read, photons.shape)
     image = np.clip(np.round(offset + gain * electrons), 0, 65535).astype(np.uint16)
-    return ErfField(image, centres, np.array(["single"] * spots))
+    return SpotField(image, centres, np.array(["single"] * spots))
+
+
+def trackpy_diameter(sigma: float) -> int:
+    """trackpy's diameter for spots of ``sigma`` px, as its documentation asks: odd, a little
+    larger than the spot."""
+    return 2 * int(round(3 * sigma)) + 1
 
 
 def make_fields(generator: str, sigma: float, background: float, snr: float, seeds) -> list:
@@ -111,11 +107,15 @@ def heavier(found: list, level: float) -> list[np.ndarray]:
     return [t.loc[t["mass"] >= level, ["x", "y"]].to_numpy() for t in found]
 
 
+def mass_levels(found: list, top: float, count: int) -> np.ndarray:
+    """``count`` quantiles, from 0 to ``top``, of the masses of trackpy's candidates ``found``."""
+    return np.quantile(np.concatenate([t["mass"].to_numpy() for t in found]), np.linspace(0, top, count))
+
+
 def best_minmass(diameter: int, fields) -> float:
     """trackpy's minmass of best F1 on ``fields``, among 40 quantiles of its candidates' masses."""
     found = trackpy_candidates(diameter, fields)
-    levels = np.quantile(np.concatenate([t["mass"].to_numpy() for t in found]), np.linspace(0, 0.975, 40))
-    return float(max(levels, key=lambda level: score(heavier(found, level), fields)["f1"]))
+    return float(max(mass_levels(found, 0.975, 40), key=lambda level: score(heavier(found, level), fields)["f1"]))
 
 
 def recall_at_precision(diameter: int, fields, precision: float) -> float:
@@ -123,7 +123,7 @@ def recall_at_precision(diameter: int, fields, precision: float) -> float:
     ``precision`` (set on the frames it is scored on: a comparison of the two masses at one
     precision, not a tuned setting)."""
     found = trackpy_candidates(diameter, fields)
-    for level in np.quantile(np.concatenate([t["mass"].to_numpy() for t in found]), np.linspace(0, 0.999, 300)):
+    for level in mass_levels(found, 0.999, 300):
         result = score(heavier(found, level), fields)
         if result["precision"] >= precision:
             return result["recall"]
@@ -138,7 +138,7 @@ def small_spots_table(frames: int) -> None:
             tuning = make_fields(generator, sigma, background, snr, TUNING_SEEDS)
             fields = make_fields(generator, sigma, background, snr, range(REPORTING_SEED, REPORTING_SEED + frames))
             images = [f.image for f in fields]
-            diameter = 2 * int(round(3 * sigma)) + 1
+            diameter = trackpy_diameter(sigma)
             minmass = best_minmass(diameter, tuning)
             ours = score(seedtrack_points(images), fields)
             theirs = score(trackpy_points([image.astype(np.float64) for image in images], diameter, minmass), fields)
@@ -225,7 +225,7 @@ def main() -> None:
         tuning = [make_spot_field(SpotFieldSpec(snr=snr, random_seed=seed)) for seed in TUNING_SEEDS]
         fields = [make_spot_field(SpotFieldSpec(snr=snr, random_seed=REPORTING_SEED + k)) for k in range(frames)]
         images = [f.image for f in fields]
-        diameter = 2 * int(round(3 * spec.sigma)) + 1
+        diameter = trackpy_diameter(spec.sigma)
         minmass = best(lambda m: trackpy_points([f.image for f in tuning], diameter, m), [0, 50, 100, 200, 400, 800, 1600], tuning)
         threshold = best(lambda t: blob_log_points([f.image for f in tuning], t), [0.01, 0.02, 0.04, 0.06, 0.08, 0.12], tuning)
         runs = {
