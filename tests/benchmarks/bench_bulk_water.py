@@ -16,10 +16,17 @@ at 80% of their points within 1 px (the most any linker could reproduce from the
 trackpy's linker (its settings above) reproduces from seedtrack's detections; and how many
 seedtrack's linker (``seedtrack.link``, track's defaults) reproduces from trackpy's own
 detections (all of them, ``batch`` as above), where detection cannot be the cause.
+
+With ``--context`` it also prints what the goal asks of any detector and linker other than the
+reference itself: how many confident tracks trackpy reproduces with one of its settings changed to
+another a user might pick (detection at noise_size 1.5, diameter 9 or 13, then linked as above;
+linking trackpy's own detections at search_range 4 or memory 1), and laptrack (search and gap
+closing as trackpy's: 5 px, 3 frames) on trackpy's detections.
 """
 
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
 import tempfile
@@ -46,14 +53,25 @@ REPRODUCED_SHARE = 0.8
 TOLERANCE_PX = 1.0
 
 
-def confident_tracks(clip: Path) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """trackpy's features and its confident tracks (frame, x, y, particle), as its tutorial makes them."""
-    trackpy.quiet()
+# trackpy as its tutorial runs it on this recording.
+LOCATE = {"diameter": 11, "minmass": 20}
+LINK = {"search_range": 5, "memory": 3}
+
+
+def grey_frames(clip: Path) -> list[np.ndarray]:
     with open_frames(clip) as source:
-        frames = [to_gray(image) for _, image in source]
-    features = trackpy.batch(frames, diameter=11, minmass=20, invert=True, processes=1)
-    linked = trackpy.link(features, search_range=5, memory=3)
-    return features, trackpy.filter_stubs(linked, 25)
+        return [to_gray(image) for _, image in source]
+
+
+def trackpy_features(frames: list[np.ndarray], **changed) -> pd.DataFrame:
+    trackpy.quiet()
+    return trackpy.batch(frames, invert=True, processes=1, **(LOCATE | changed))
+
+
+def confident_tracks(frames: list[np.ndarray]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """trackpy's features and its confident tracks (frame, x, y, particle), as its tutorial makes them."""
+    features = trackpy_features(frames)
+    return features, trackpy.filter_stubs(trackpy.link(features, **LINK), 25)
 
 
 def held(reference: pd.DataFrame, detections: dict[str, np.ndarray]) -> int:
@@ -62,15 +80,46 @@ def held(reference: pd.DataFrame, detections: dict[str, np.ndarray]) -> int:
     return int(np.sum(hit.to_numpy() >= REPRODUCED_SHARE))
 
 
-def trackpy_linked(detections: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def trackpy_linked(detections: dict[str, np.ndarray], **changed) -> dict[str, np.ndarray]:
     table = pd.DataFrame({name: detections[name] for name in ("frame", "x", "y")})
-    linked = trackpy.link(table, search_range=5, memory=3)
+    linked = trackpy.link(table, **(LINK | changed))
     return {"frame": linked["frame"].to_numpy(), "x": linked["x"].to_numpy(), "y": linked["y"].to_numpy(), "track_id": linked["particle"].to_numpy()}
 
 
 def seedtrack_linked(features: pd.DataFrame) -> dict[str, np.ndarray]:
     linked = seedtrack.link(features[["frame", "x", "y"]].reset_index(drop=True))
     return {name: linked[name].to_numpy() for name in ("frame", "x", "y", "track_id")}
+
+
+def laptrack_linked(features: pd.DataFrame) -> dict[str, np.ndarray]:
+    from laptrack import LapTrack
+
+    reach, gap = LINK["search_range"], LINK["memory"]
+    linker = LapTrack(
+        metric="sqeuclidean", cutoff=reach**2, gap_closing_metric="sqeuclidean", gap_closing_cutoff=reach**2, gap_closing_max_frame_count=gap
+    )
+    linked, _, _ = linker.predict_dataframe(features[["frame", "x", "y"]].reset_index(drop=True), ["x", "y"], only_coordinate_cols=False)
+    return {"frame": linked["frame"].to_numpy(), "x": linked["x"].to_numpy(), "y": linked["y"].to_numpy(), "track_id": linked["track_id"].to_numpy()}
+
+
+def as_columns(features: pd.DataFrame) -> dict[str, np.ndarray]:
+    return {name: features[name].to_numpy() for name in ("frame", "x", "y")}
+
+
+def context(frames: list[np.ndarray], features: pd.DataFrame, reference: pd.DataFrame) -> None:
+    """What the goal asks of anything but the reference: trackpy with one setting changed, laptrack."""
+    total = reference["particle"].nunique()
+    print("  the same confident tracks reproduced by trackpy with one setting changed, and by laptrack:")
+    for changed in ({"noise_size": 1.5}, {"diameter": 9}, {"diameter": 13}):
+        located = as_columns(trackpy_features(frames, **changed))
+        count = reproduced(reference, trackpy_linked(located))[0]
+        print(f"    trackpy, locate {changed}, linked as the reference: {count} of {total}, {count / total:.4f} (held {held(reference, located)})")
+    detections = as_columns(features)
+    for changed in ({"search_range": 4}, {"memory": 1}):
+        count = reproduced(reference, trackpy_linked(detections, **changed))[0]
+        print(f"    trackpy, the reference's detections, link {changed}: {count} of {total}, {count / total:.4f}")
+    count = reproduced(reference, laptrack_linked(features))[0]
+    print(f"    laptrack (5 px, gaps of 3 frames) on the reference's detections: {count} of {total}, {count / total:.4f}")
 
 
 def found_within(reference: pd.DataFrame, table: dict[str, np.ndarray], ids: np.ndarray | None = None) -> np.ndarray:
@@ -102,8 +151,13 @@ def reproduced(reference: pd.DataFrame, tracks: dict[str, np.ndarray]) -> tuple[
 
 
 def main() -> None:
-    clip = Path(sys.argv[1]) if len(sys.argv) > 1 else CLIP
-    features, reference = confident_tracks(clip)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("clip", nargs="?", type=Path, default=CLIP)
+    parser.add_argument("--context", action="store_true", help="also trackpy with one setting changed, and laptrack")
+    args = parser.parse_args()
+    clip = args.clip
+    frames = grey_frames(clip)
+    features, reference = confident_tracks(frames)
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
         result = subprocess.run([sys.executable, "-m", "seedtrack", "run", str(clip), "--out", folder], capture_output=True, text=True)
@@ -113,11 +167,11 @@ def main() -> None:
         detections = read_table(Path(folder) / "detections.csv")
         tracks = read_table(Path(folder) / "tracks.csv")
     print(result.stdout.strip().splitlines()[0])
-    frames = reference["frame"].nunique()
+    frame_count = reference["frame"].nunique()
     print(
         f"{clip.name}: trackpy's confident tracks: {reference['particle'].nunique()} tracks, "
-        f"{len(reference)} positions ({len(reference) / frames:.0f} a frame); seedtrack run (defaults, {seconds:.0f} s): "
-        f"{len(detections['x']) / frames:.0f} detections a frame, {len(np.unique(tracks['track_id']))} tracks"
+        f"{len(reference)} positions ({len(reference) / frame_count:.0f} a frame); seedtrack run (defaults, {seconds:.0f} s): "
+        f"{len(detections['x']) / frame_count:.0f} detections a frame, {len(np.unique(tracks['track_id']))} tracks"
     )
     hit = found_within(reference, detections) >= 0
     print(f"  positions of confident tracks with a seedtrack detection within {TOLERANCE_PX:g} px: {hit.mean():.4f} (goal 0.95)")
@@ -132,6 +186,8 @@ def main() -> None:
         ("reproduced by seedtrack's linker on trackpy's own detections", reproduced(reference, seedtrack_linked(features))[0]),
     ):
         print(f"  confident tracks {what}: {count} of {total}, {count / total:.4f}")
+    if args.context:
+        context(frames, features, reference)
 
 
 if __name__ == "__main__":
