@@ -37,7 +37,9 @@ _SHIFT_PX = 0.6
 _STANDING_FLOORS = 2.0
 # A spot within this many diameters of one this many times heavier is its halo, not a spot (the
 # running mean over a diameter about a strong spot is pulled up, about a dark ring down; the
-# wide-background test catches the halo further out).
+# wide-background test catches the halo further out), unless it stands out of the wide
+# background as far as the noise's own maxima do only once per 10^5 pixels (a bead beside a
+# brighter one).
 _HALO_REACH = 1.0
 _HALO_RATIO = 3.0
 # Most moves of the disc per spot, and steps of the Gaussian-windowed centroid.
@@ -108,12 +110,17 @@ class SpotSettings:
     floor : float
         Band-passed level below which a pixel is background and weighs nothing, in the data's
         units (Crocker and Grier's clipping level; one noise standard deviation by default).
+    standing : float
+        How far above the wide background (the frame smoothed by 1 px, in the data's units) a
+        spot within a diameter of one three times heavier must stand to count as a spot and
+        not as that one's halo; infinite: never.
     """
 
     diameter: int
     min_mass: float
     polarity: str = "light"
     floor: float = 0.0
+    standing: float = np.inf
 
     def __post_init__(self) -> None:
         if int(self.diameter) != self.diameter or self.diameter < 3 or self.diameter % 2 == 0:
@@ -122,6 +129,8 @@ class SpotSettings:
             raise ValueError(f"min_mass must be finite and >= 0, got {self.min_mass:g}")
         if not np.isfinite(self.floor) or self.floor < 0:
             raise ValueError(f"floor must be finite and >= 0, got {self.floor:g}")
+        if np.isnan(self.standing) or self.standing < 0:
+            raise ValueError(f"standing must be >= 0, got {self.standing:g}")
         if self.polarity not in ("dark", "light"):
             raise ValueError(f"polarity must be dark or light, got {self.polarity!r}")
 
@@ -322,22 +331,32 @@ def _unit_noise(shape: tuple[int, int], skewness: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=None)
-def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, float, float, float]:
-    """(floor, least mass, tail, median mass) for white noise of unit standard deviation and this
-    skewness at this diameter.
+def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, float, float, float, float]:
+    """(floor, least mass, tail, median mass, standing) for white noise of unit standard
+    deviation and this skewness at this diameter.
 
     The floor is the band-passed noise's standard deviation; the least mass is the mass that
     the noise's own local maxima exceed once per 10^5 pixels, found on a frame of generated
     noise (fixed seed, so always the same); the tail is how much more mass they exceed ten
     times more rarely (measured between once per 10^4 and once per 10^5 pixels); the median
-    mass is their median.
+    mass is their median; the standing is how far above the wide background they stand once per
+    10^5 pixels.
     """
     noise = _unit_noise((_CALIBRATION_SIZE, _CALIBRATION_SIZE), skewness)
-    band = band_pass(noise, diameter)
+    band, smooth = _band_and_smooth(noise, diameter, "light")
     floor = float(np.std(band[diameter:-diameter, diameter:-diameter]))
-    masses = np.sort(detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor))["mass"])[::-1]
+    found = detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor))
+    masses = np.sort(found["mass"])[::-1]
     least = float(masses[int(_FALSE_SPOTS_PER_PIXEL * noise.size)])
-    return floor, least, least - float(masses[int(10 * _FALSE_SPOTS_PER_PIXEL * noise.size)]), float(np.median(masses))
+    rows, columns = np.round(found["y"]).astype(int), np.round(found["x"]).astype(int)
+    standing = np.sort(smooth[rows, columns] - _wide_background(smooth, diameter, rows, columns))[::-1]
+    return (
+        floor,
+        least,
+        least - float(masses[int(10 * _FALSE_SPOTS_PER_PIXEL * noise.size)]),
+        float(np.median(masses)),
+        float(standing[int(_FALSE_SPOTS_PER_PIXEL * noise.size)]),
+    )
 
 
 def _valley(masses: np.ndarray, reach: float) -> float:
@@ -502,7 +521,10 @@ def fit_spot_settings(
     masses of the frame's candidates show the spots as a mode of their own above the noise's
     maxima (a jump of 3 times in the sorted masses, just above a noise-like tail), the least mass
     is no lower than the middle of that valley: compression takes off the fine noise the level is
-    read from, and its blocks make maxima far heavier than that level's noise would.
+    read from, and its blocks make maxima far heavier than that level's noise would. A spot
+    beside one three times heavier is taken for a bead, not its halo, when it stands above the
+    wide background as far as the noise's maxima (of that skewness, at that level) do once per
+    10^5 pixels.
 
     Example
     -------
@@ -515,8 +537,8 @@ def fit_spot_settings(
     sigma = pixel_noise(gray, roi)
     strongest = max(sigma, _noisiest_level(gray, roi))
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
-    floor, mass, tail, median = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
-    settings = SpotSettings(diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma)
+    floor, mass, tail, median, standing = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
+    settings = SpotSettings(diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma, standing=standing * strongest)
     pixels = int(np.count_nonzero(roi)) if roi is not None else np.asarray(gray).shape[0] * np.asarray(gray).shape[1]
     # Every candidate's mass: a spot's is decided by heavier ones only, so those above the least
     # mass are the spots the least mass finds.
@@ -601,13 +623,14 @@ def detect_spots(
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     # A spot is lighter than the wide background around it, not only than the running mean
     # over its diameter, which a dark ring pulls down into a light halo about it.
-    keep = smooth[rows, columns] - _wide_background(smooth, diameter, rows, columns) > _STANDING_FLOORS * settings.floor
+    standing = smooth[rows, columns] - _wide_background(smooth, diameter, rows, columns)
+    keep = standing > _STANDING_FLOORS * settings.floor
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     if rows.size == 0:
         return _empty()
     ox, oy = _centroid(weights, dx, dy, window)
     x, y = columns + ox, rows + oy
-    x, y, order = _without_duplicates(x, y, mass, radius)
+    x, y, order = _without_duplicates(x, y, mass, radius, standing[keep] > settings.standing)
     weights, rows, columns = weights[order], rows[order], columns[order]
     ex, ey = dx[None, :] - ox[order, None], dy[None, :] - oy[order, None]
     total = mass[order]
@@ -740,10 +763,14 @@ def _refine(
     return rows, columns, mass, weights
 
 
-def _without_duplicates(x: np.ndarray, y: np.ndarray, mass: np.ndarray, radius: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _without_duplicates(
+    x: np.ndarray, y: np.ndarray, mass: np.ndarray, radius: int, standing_out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Drop the lighter of two spots closer than a radius (two maxima of one flat spot whose
     discs walked onto it), and a spot within a diameter of one ``_HALO_RATIO`` times heavier
-    (the light halo the running mean leaves around a strong spot, above all one ringed dark);
+    (the light halo the running mean leaves around a strong spot, above all one ringed dark)
+    unless it is ``standing_out`` of the wide background (a halo is light only against the
+    running mean: the bead beside a brighter one also stands out of the wide background);
     returns the kept x, y and their indices into the input."""
     order = np.argsort(-mass, kind="stable")
     pairs = cKDTree(np.column_stack((x, y))).query_pairs(_HALO_REACH * (2 * radius + 1), output_type="ndarray")
@@ -754,7 +781,7 @@ def _without_duplicates(x: np.ndarray, y: np.ndarray, mass: np.ndarray, radius: 
     heavy = np.where(rank[pairs[:, 0]] < rank[pairs[:, 1]], pairs[:, 0], pairs[:, 1])
     light = pairs[:, 0] + pairs[:, 1] - heavy
     close = np.hypot(x[heavy] - x[light], y[heavy] - y[light]) <= max(radius, 1)
-    halo = mass[heavy] >= _HALO_RATIO * mass[light]
+    halo = (mass[heavy] >= _HALO_RATIO * mass[light]) & ~standing_out[light]
     wanted = close | halo
     heavy, light = heavy[wanted], light[wanted]
     dropped = np.zeros(x.size, bool)

@@ -52,6 +52,16 @@ def test_the_least_mass_drops_faint_spots():
     assert len(masses) == 2 and list(kept["x"].round()) == [20.0]
 
 
+def test_a_faint_bead_beside_a_bright_one_is_no_halo():
+    # A bead a seventh as bright, 9 px from a bright one (within its diameter): the running mean
+    # about it is no darker than the wide background, so its light is its own, not a halo's.
+    noise = np.random.default_rng(4).normal(0, 2, ROWS.shape)
+    frame = gaussians([(40.0, 40.0)]) + gaussians([(49.0, 40.0)], amplitude=12.0, background=0.0) + noise
+    found = detect_spots(frame, fit_spot_settings(frame, "light", diameter=11))
+    assert len(found["x"]) == 2
+    np.testing.assert_allclose(np.sort(found["x"]), [40.0, 49.0], atol=0.5)
+
+
 def test_touching_spots_stay_apart():
     found = detect_spots(gaussians([(40.0, 40.0), (46.0, 40.0)]), SpotSettings(diameter=11, min_mass=10))
     assert len(found["x"]) == 2
