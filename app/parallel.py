@@ -21,7 +21,6 @@ import threading
 from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Callable, Iterable, Iterator, TypeVar
 
-import cv2
 import numpy as np
 
 from seedtrack.data.video import write_video
@@ -158,29 +157,6 @@ def read_ahead(items: Iterable[Item], depth: int = 4) -> Iterator[Iterator[Item]
     finally:
         stop.set()
         reader.join()
-
-
-@contextlib.contextmanager
-def opencv_threads(count: int) -> Iterator[None]:
-    """OpenCV's calls use ``count`` threads inside the block (OpenCV's setting is the process's),
-    and as many as before after it.
-
-    Example
-    -------
-    >>> import cv2
-    >>> before = cv2.getNumThreads()
-    >>> with opencv_threads(1):
-    ...     cv2.getNumThreads()
-    1
-    >>> cv2.getNumThreads() == before
-    True
-    """
-    previous = cv2.getNumThreads()
-    cv2.setNumThreads(count)
-    try:
-        yield
-    finally:
-        cv2.setNumThreads(previous)
 
 
 class VideoEncoder:

@@ -36,7 +36,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from .errors import UsageError
 from .points import TrackingSettings, group_points, track_frames
-from .parallel import VideoEncoder, opencv_threads, read_ahead, threaded_map
+from .parallel import VideoEncoder, read_ahead, threaded_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
 from .wording import counted
@@ -182,10 +182,8 @@ def detect_clip(
         # The next frames decode beside detection, on another core if there is one. Frames are
         # detected in threads, not processes: both detectors spend most of their time in OpenCV
         # and numpy without Python's lock, and a clip of a few hundred frames took longer to
-        # detect in two processes than in one (starting them, pickling frames). OpenCV's own
-        # threads are left out: beside the decoder's threads and ours they found no idle core
-        # and took a third more processor time per frame.
-        with progress_bar(source.frame_count, "detecting") as bar, opencv_threads(1):
+        # detect in two processes than in one (starting them, pickling frames).
+        with progress_bar(source.frame_count, "detecting") as bar:
             with read_ahead(itertools.chain([first] if first is not None else [], frames), depth=ahead) as read:
                 detections = detect_frames(counted_off(read), detector, functools.partial(threaded_map, workers=workers))
         if not detections.frame_indices.size:
