@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import itertools
 import sys
 import threading
 from dataclasses import dataclass
@@ -27,7 +28,7 @@ from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.detection.background import temporal_median
-from seedtrack.detection.blobs import BlobOptions
+from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
 from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames, grey_levels
 from seedtrack.detection.roi import Circle, circle_mask
@@ -158,23 +159,33 @@ def detect_clip(
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
         detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass)
         preview = None
+
+        def decoded():
+            nonlocal preview
+            for index, image in source:
+                if index == preview_frame:
+                    preview = to_bgr8(image, source.span).copy()
+                # Both detectors see only the grey levels of an 8-bit colour frame: made here,
+                # beside decoding, they are a third of the bytes to wait in the queue, so three
+                # times the frames decode ahead while the first frame's decisions are made
+                # (half a second at 1280x960).
+                yield index, to_gray(image) if image.dtype == np.uint8 and image.ndim == 3 else image
+
+        def counted_off(read):
+            for item in read:
+                yield item
+                bar.update(1)
+
+        frames = decoded()
+        first = next(frames, None)
+        ahead = _frames_ahead(first[1].nbytes if first is not None else 0)
+        # The next frames decode beside detection, on another core if there is one. Frames are
+        # detected in threads, not processes: both detectors spend most of their time in OpenCV
+        # and numpy without Python's lock, and a clip of a few hundred frames took longer to
+        # detect in two processes than in one (starting them, pickling frames).
         with progress_bar(source.frame_count, "detecting") as bar:
-
-            def frames(read):
-                nonlocal preview
-                for index, image in read:
-                    if index == preview_frame:
-                        preview = to_bgr8(image, source.span).copy()
-                    yield index, image
-                    bar.update(1)
-
-            # The next frames decode beside detection, on another core if there is one, and go
-            # on decoding while the first frame's decisions are made. Frames
-            # are detected in threads, not processes: both detectors spend most of their time in
-            # OpenCV and numpy without Python's lock, and a clip of a few hundred frames took
-            # longer to detect in two processes than in one (starting them, pickling frames).
-            with read_ahead(source, depth=_frames_ahead(source.size)) as read:
-                detections = detect_frames(frames(read), detector, functools.partial(threaded_map, workers=workers))
+            with read_ahead(itertools.chain([first] if first is not None else [], frames), depth=ahead) as read:
+                detections = detect_frames(counted_off(read), detector, functools.partial(threaded_map, workers=workers))
         if not detections.frame_indices.size:
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
@@ -184,10 +195,9 @@ def detect_clip(
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
 
 
-def _frames_ahead(size: tuple[int, int]) -> int:
-    """How many frames of ``size`` (width, height) may wait decoded: about 64 MB of 8-bit colour,
-    between 4 and 64 frames."""
-    return int(np.clip(_READ_AHEAD_BYTES // (3 * size[0] * size[1]), 4, 64))
+def _frames_ahead(frame_bytes: int) -> int:
+    """How many frames of ``frame_bytes`` each may wait decoded: about 64 MB, between 4 and 64."""
+    return int(np.clip(_READ_AHEAD_BYTES // max(frame_bytes, 1), 4, 64))
 
 
 def _unused_options(settings: DetectionSettings, choice: DetectorChoice) -> str:

@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Callable, Iterable, Iterator, Sequence
 
+import cv2
 import numpy as np
 
 from seedtrack.data.depth import to_uint8, value_range
@@ -160,7 +161,7 @@ class ClipDetector:
             self._first = False
         if self.choice.spots is not None:
             return detect_spots(native, self.choice.spots, roi=self.roi, background=self._background)
-        return detect_blobs(gray, self.options, background=self._background, roi=self.roi)
+        return detect_blobs(gray, self.options, background=self._background, roi=self.roi, roi_box=self._roi_box)
 
     def _decide(self, gray: np.ndarray, native: np.ndarray) -> None:
         if isinstance(self._pending_roi, Circle):
@@ -169,6 +170,8 @@ class ClipDetector:
             self.roi, self.circle = dish_mask(gray)
         if self.roi is not None and self.roi.shape != gray.shape:
             raise ValueError(f"the region of interest is {self.roi.shape[1]}x{self.roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
+        # Found once: at 1280x960 finding it took a third as long as detecting a frame.
+        self._roi_box = cv2.boundingRect(self.roi) if self.roi is not None else None
         if self.options.polarity == "auto":
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
         scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background

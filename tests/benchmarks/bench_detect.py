@@ -6,15 +6,17 @@ seconds of this process (a busy shared machine inflates wall-clock time):
 - the blob detector with the default options as ``seedtrack detect`` applies them (polarity
   decided once per clip) and with the polarity decided again on every frame, on 80 dark discs;
 - the spot detector (settings fitted once per clip) on 300 Gaussian spots at signal-to-noise 4;
-- on trackpy's bulk-water clip and on a generated 300-frame 640x512 dish of 80 seeds, the
-  detector each gets by default (:class:`seedtrack.detection.clip.ClipDetector`) alone, and
+- on trackpy's bulk-water clip, a generated 300-frame 640x512 dish of 80 seeds and a 200-frame
+  1280x960 dish of 200 seeds, the detector each gets by default (:class:`seedtrack.detection.clip.ClipDetector`) alone, and
   decoding alone and decoding plus that detector (decoding threads as the reader sets them,
   detection on one core), in CPU seconds;
 - the same as ``seedtrack`` runs it (:func:`seedtrack.pipeline.detect_clip`: decoding in a
   thread of its own beside detection in 1 or 2 threads, ``--workers`` 1 and 2), in wall-clock seconds of the work
-  alone (a fresh process each, imports not counted), on the same two clips; decoding alone and
+  alone (a fresh process each, imports not counted), on the same clips; decoding alone and
   each way of detecting are run in turn, and the ratio is taken within each turn. Wall-clock
-  time is only meaningful on a quiet machine: the load average is printed beside it.
+  time is only meaningful on a quiet machine: the load average is printed beside it, and the
+  ratio of the processor seconds of the whole process (all its threads), which a busy machine
+  moves less.
 
 Goals from issues #4 and #16: at least 200 frames/s at 640x512 and 30 frames/s at 1920x1080 for
 the detector alone; decoding plus detection at least 0.8 times decoding alone.
@@ -90,40 +92,43 @@ from seedtrack.data.frames import open_frames
 from seedtrack.pipeline import detect_clip
 if __name__ == "__main__":
     clip, workers = Path(sys.argv[1]), int(sys.argv[2])
-    start = time.perf_counter()
+    start, used = time.perf_counter(), time.process_time()
     if workers == 0:
         with open_frames(clip) as source:
             for _ in source:
                 pass
     else:
         detect_clip(clip, workers=workers, say=None)
-    print(time.perf_counter() - start)
+    print(time.perf_counter() - start, time.process_time() - used)
 """
 
 
-def pipeline_seconds(clip: Path, workers: int) -> float:
-    """Wall-clock seconds of decoding ``clip`` (``workers`` 0) or of ``detect_clip`` on it."""
+def pipeline_seconds(clip: Path, workers: int) -> tuple[float, float]:
+    """Wall-clock and processor seconds of decoding ``clip`` (``workers`` 0) or of
+    ``detect_clip`` on it."""
     with tempfile.TemporaryDirectory() as folder:
         script = Path(folder) / "timed.py"
         script.write_text(_TIMED)
         done = subprocess.run([sys.executable, str(script), str(clip), str(workers)], check=True, capture_output=True, text=True)
-    return float(done.stdout.split()[-1])
+    wall, used = done.stdout.split()[-2:]
+    return float(wall), float(used)
 
 
 def pipeline_table(clips: dict[str, Path], repeats: int = 5) -> None:
     """Decoding alone beside decoding plus detection as ``seedtrack`` runs it, wall clock."""
     print(f"decoding + detection as seedtrack runs it (wall clock, median of {repeats}; load average {os.getloadavg()[0]:.1f}):")
-    print("| clip | decoding alone, frames/s | workers | decoding + detection, frames/s | of decoding alone |")
-    print("| --- | --- | --- | --- | --- |")
+    print("| clip | decoding alone, frames/s | workers | decoding + detection, frames/s | of decoding alone | processor time, of decoding alone |")
+    print("| --- | --- | --- | --- | --- | --- |")
     for name, clip in clips.items():
         with open_frames(clip) as source:
             frames = source.frame_count
         turns = [[pipeline_seconds(clip, workers) for workers in (0, 1, 2)] for _ in range(repeats)]
-        alone = statistics.median(turn[0] for turn in turns)
+        alone = statistics.median(turn[0][0] for turn in turns)
         for column, workers in ((1, 1), (2, 2)):
-            both = statistics.median(turn[column] for turn in turns)
-            ratio = statistics.median(turn[0] / turn[column] for turn in turns)
-            print(f"| {name} | {frames / alone:.0f} | {workers} | {frames / both:.0f} | {ratio:.2f} x |")
+            both = statistics.median(turn[column][0] for turn in turns)
+            ratio = statistics.median(turn[0][0] / turn[column][0] for turn in turns)
+            used = statistics.median(turn[0][1] / turn[column][1] for turn in turns)
+            print(f"| {name} | {frames / alone:.0f} | {workers} | {frames / both:.0f} | {ratio:.2f} x | {used:.2f} x |")
 
 
 def main() -> None:
@@ -141,9 +146,10 @@ def main() -> None:
     if not CLIP.exists():
         return
     with tempfile.TemporaryDirectory() as folder:
-        dish = Path(folder) / "dish" / "clip.mp4"
+        dish, large = Path(folder) / "dish" / "clip.mp4", Path(folder) / "large" / "clip.mp4"
         write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), dish.parent)
-        clips = {CLIP.name: CLIP, "dish, 80 seeds, 640x512": dish}
+        write_dish_clip(DishSpec(seeds=200, frames=200, width=1280, height=960, rim_speed=20.0, random_seed=1000), large.parent)
+        clips = {CLIP.name: CLIP, "dish, 80 seeds, 640x512": dish, "dish, 200 seeds, 1280x960": large}
         for name, clip in clips.items():
             one_core(name, clip)
         pipeline_table(clips)
