@@ -24,20 +24,16 @@ from __future__ import annotations
 
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import trackpy
 from scipy.spatial import cKDTree
 
+from bench_bulk_water import CLIP
 from seedtrack.data.frames import open_frames
 from seedtrack.detection.blobs import to_gray
 from seedtrack.detection.clip import ClipDetector
 
-CLIP = next(
-    (folder / "shared" / "data" / "bulk-water-240-479.mp4" for folder in Path(__file__).resolve().parents if (folder / "shared" / "data").is_dir()),
-    Path("bulk-water-240-479.mp4"),
-)
 EVERY = 6
 SPACING_PX = 24
 JITTER_PX = 4.0
