@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import tempfile
 
 from selenium import webdriver
@@ -19,6 +20,12 @@ FLAGS = (
     "--no-first-run",
     "--window-size=1280,800",
 )
+
+
+def missing_browser() -> str:
+    """What of Debian's Chromium and its driver this machine lacks, or "" when both are there."""
+    absent = [path for path in (CHROMIUM, CHROMEDRIVER) if not os.access(path, os.X_OK)]
+    return " and ".join(absent) + " not found" if absent else ""
 
 
 def headless_chromium() -> webdriver.Chrome:
