@@ -152,3 +152,12 @@ def test_run_starts_the_fork_server_before_its_imports_only_for_more_than_one_wo
     assert _workers_asked(["run", "clip.mp4", "--out", "out", "--workers", "1"]) == 1
     assert _workers_asked(["run", "--help"]) == 1
     assert _workers_asked(["run", "clip.mp4", "--out", "out", "--workers", "two"]) == 1
+
+
+@pytest.mark.parametrize("command", ["run", "detect", "render", "batch", "compare", "annotate", "review"])
+def test_help_names_every_kind_of_clip_input(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for kind in ("video file", "TIFF stack", "image folder", "glob pattern"):
+        assert kind in text, f"{command} --help does not name {kind}"

@@ -16,6 +16,7 @@ from ..annotate.frames import FrameCache
 from ..annotate.server import AnnotateServer
 from ..annotate.session import CORRECTIONS, TRACKS, Session
 from ..errors import UsageError
+from ..wording import CLIP_INPUT_HELP
 
 
 def add_parser(subparsers) -> None:
@@ -27,7 +28,7 @@ def add_parser(subparsers) -> None:
         "sure of. Every edit is saved at once to DIR/corrections.txt (for `seedtrack correct`) and DIR/tracks.csv. "
         "The first line printed is the page's address, with its secret token; stop with Ctrl-C.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder, glob pattern or TIFF")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("tracks", type=Path, nargs="?", default=None, metavar="TRACKS", help="tracks to correct (any track format); none: track by hand")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder for corrections.txt and tracks.csv (an earlier session's edits there are resumed)")
     parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): points a click snaps to")

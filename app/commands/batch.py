@@ -15,7 +15,7 @@ from ..batch import ClipResult, RunOptions, clip_names, run_batch
 from ..errors import UsageError
 from ..parallel import default_workers
 from ..progress import progress_bar
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 from .detect import add_detection_options, detection_settings
 from .run import workers_count
 from .tracker_options import add_tracker_options, tracking_settings
@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
         "A clip that fails does not stop the others (exit status 1 if any failed); a rerun skips the clips already done "
         "with the same options.",
     )
-    parser.add_argument("inputs", type=Path, nargs="+", metavar="INPUT", help="video files, image folders or glob patterns")
+    parser.add_argument("inputs", type=Path, nargs="+", metavar="INPUT", help=f"clips, each a {CLIP_INPUT_HELP}")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     parser.add_argument(
         "--workers",

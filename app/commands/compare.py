@@ -15,7 +15,7 @@ from seedtrack.tracking.tracks import Tracks
 from ..errors import UsageError
 from ..frame_output import write_frames
 from ..drawing import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 from .render import add_view_options, check_view_options, open_range
 
 DEFAULT_TOLERANCE = 3.0
@@ -29,7 +29,7 @@ def add_parser(subparsers) -> None:
         "(a point to the same track's next point) disagrees with the other set when its two points are not matched to one and the same "
         "track there, and is drawn in yellow.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("a", type=Path, metavar="A", help="first track set (csv, trackpy csv, MOT txt, TrackMate or ISBI xml), drawn blue")
     parser.add_argument("b", type=Path, metavar="B", help="second track set, drawn vermillion")
     add_view_options(parser, out_required=True)

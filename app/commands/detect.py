@@ -27,7 +27,7 @@ from ..parallel import default_workers
 from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectionSettings, detect_clip
 from ..review import review_zoom
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 
 _CIRCLE = re.compile(r"^\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*$")
 _FOUND_BGR = (0, 0, 255)
@@ -219,7 +219,7 @@ def add_parser(subparsers) -> None:
         "eccentricity; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates). "
         "--preview draws what was found and the region of interest on one frame.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder, glob pattern or TIFF stack")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("--out", type=output_file, required=True, metavar="detections.csv", help="output CSV")
     parser.add_argument("--preview", type=output_file, default=None, metavar="PNG", help="write a preview image of one frame")
     parser.add_argument("--preview-frame", type=int, default=None, metavar="F", help="0-based frame of the preview (default: the first processed)")

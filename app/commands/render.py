@@ -18,7 +18,7 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..frame_output import output_kind, write_frames
 from ..drawing import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 
 DEFAULT_TRAIL = 10
 # Beyond what any player shows, or GIF's 1/100 s frame delays can hold.
@@ -57,7 +57,7 @@ def add_parser(subparsers) -> None:
         "beside the head, interpolated positions hollow, starts and ends marked, detections that no track holds "
         "crossed out (with --detections), a legend and the frame number.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
     add_view_options(parser, out_required=False)
     parser.add_argument("--summary", type=Path, default=None, metavar="PNG", help="also draw every whole trajectory over the first frame into this PNG")

@@ -14,7 +14,7 @@ from ..errors import UsageError
 from ..progress import progress_bar
 from ..review import draw_review_page
 from .render import check_fits
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 
 DEFAULT_EVERY = 5
 
@@ -25,7 +25,7 @@ def add_parser(subparsers) -> None:
         description="Write DIR/review_FFFFFF.png for every Nth frame of INPUT (and the last frame of the tracks): "
         "the frame enlarged, each track's position, recent path and id in large print.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to review (any track format)")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     parser.add_argument("--every", type=int, default=DEFAULT_EVERY, metavar="N", help=f"draw every Nth frame (default {DEFAULT_EVERY})")

@@ -8,7 +8,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..parallel import default_workers
 from ..pipeline import run_pipeline
-from ..wording import counted
+from ..wording import CLIP_INPUT_HELP, counted
 from .detect import add_detection_options, detection_settings
 from .tracker_options import add_tracker_options, tracking_settings
 
@@ -47,7 +47,7 @@ def add_parser(subparsers) -> None:
         "and end anywhere in the clip unless --fixed-count), and write DIR/detections.csv, DIR/tracks.csv and "
         "DIR/overlay.mp4.",
     )
-    parser.add_argument("input", type=Path, metavar="INPUT", help="video file, image folder or glob pattern")
+    parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     add_detection_options(parser)
     add_tracker_options(parser)
