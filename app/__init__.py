@@ -29,6 +29,23 @@ so that ``seedtrack --help`` starts fast.
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("seedtrack")
+    except importlib.metadata.PackageNotFoundError:
+        # Run from a checkout that was never installed: the version pyproject.toml declares.
+        import pathlib
+        import tomllib
+
+        pyproject = pathlib.Path(__file__).resolve().parent.parent / "pyproject.toml"
+        with pyproject.open("rb") as file:
+            return tomllib.load(file)["project"]["version"]
+
+
+__version__ = _version()
 
 # Name -> module that defines it, imported on first access (PEP 562).
 _LAZY = {

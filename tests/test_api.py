@@ -222,3 +222,14 @@ def test_the_readme_example_runs_as_written(tmp_path, monkeypatch, capsys):
     assert printed[0].startswith("motion: ")
     assert printed[1] == "80 of 80 seeds tracked correctly"
     assert printed[2] == "wrote dish/overlay.mp4: 10 frames of 80 tracks, 640x480"
+
+
+def test_version_is_the_declared_one():
+    import tomllib
+    from pathlib import Path
+
+    import seedtrack
+
+    pyproject = Path(__file__).resolve().parent.parent / "pyproject.toml"
+    declared = tomllib.loads(pyproject.read_text())["project"]["version"]
+    assert seedtrack.__version__ == declared
