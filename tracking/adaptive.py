@@ -39,7 +39,7 @@ SPEED_MARGIN = 2.0
 # than a Gaussian (speed steps along the track, turns across it), and a true link beyond the gate
 # leaves its point to a new track; 6 lost such links on fast smooth motion and on dishes with
 # seeds missed, 12 let wrong links in where seeds are missed often and points come and go.
-GATE = 9.0
+MEASURED_MOTION_GATE_SIGMAS = 9.0
 # The nearest-neighbour share of a first link's score costs phi_max at this many times the
 # measured speed limit. At the limit itself (twice the fastest speed) a rim seed of a turning dish
 # at 42 px/frame pays 0.16 phi_max for its true first link, and a link to a slow neighbour 9 px
@@ -173,7 +173,7 @@ def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfi
     (20.0, 17.0)
     """
     measured = max(SPEED_MARGIN * statistics.fastest, 1.0)
-    model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=GATE, speed_scale=FIRST_LINK_SCALE * measured)
+    model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=MEASURED_MOTION_GATE_SIGMAS, speed_scale=FIRST_LINK_SCALE * measured)
     if config.d_max is None:
         return replace(config, individual=model, d_max=measured)
     # The user's limit is on speeds in the image; about the drift a speed up to limit + |drift|
@@ -233,4 +233,4 @@ def without_faster_links(tracks: Tracks, limit: float) -> Tracks:
     )
 
 
-__all__ = ["track_measured_motion", "first_pass", "measured_config", "head_slaves", "without_faster_links", "GATE", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]
+__all__ = ["track_measured_motion", "first_pass", "measured_config", "head_slaves", "without_faster_links", "MEASURED_MOTION_GATE_SIGMAS", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]

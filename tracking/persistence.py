@@ -26,7 +26,7 @@ from .tracks import NO_MEASUREMENT, Tracks
 
 # Sigmas from the prediction at which a link costs phi_max (the weight of a slave). Under a 2-D
 # Gaussian, a true link falls beyond 3.5 sigma with probability exp(-3.5**2 / 2) = 0.2%.
-GATE = 3.5
+DEFAULT_GATE_SIGMAS = 3.5
 # Links whose squared change exceeds this many times its variance (per axis, halved: an
 # exponential variable of mean 1 for Gaussian noise; 4.5 is 3 sigma) are left out of the fit as
 # a first pass's wrong links; the variance of those kept is divided by the share of an
@@ -434,7 +434,7 @@ class PersistentModel:
     """
 
     statistics: MotionStatistics
-    gate: float = GATE
+    gate: float = DEFAULT_GATE_SIGMAS
     w1: float = 0.1
     w2: float = 0.9
     speed_scale: float | None = None

@@ -31,8 +31,8 @@ _REACH = 2
 # Two points are an encounter when closer than this many noise sigmas (at their speed).
 _ENCOUNTER_SIGMAS = 3.0
 # A track whose velocity changes beyond the encounter distance at k is paired with the tracks
-# whose points lie within this many of its noise sigmas: the final pass's gate (adaptive.GATE),
-# the farthest a point it took can be from its prediction.
+# whose points lie within this many of its noise sigmas: the final pass's gate
+# (adaptive.MEASURED_MOTION_GATE_SIGMAS), the farthest a point it took can be from its prediction.
 _KINK_REACH = 9.0
 # An exchange is made only if it makes the window this much more likely (log-likelihood units),
 # so that rounding never flips a tie.
