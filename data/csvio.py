@@ -22,6 +22,7 @@ from .errors import DataError, check_file, warn
 from .formats import CSV_FORMATS, EXTENSIONS, described
 from .formats.trackmate import check_pixels
 from .numbers import check_range
+from .outputset import check_member
 
 DETECTION_COLUMNS = ("frame", "x", "y", "area")
 TRACK_COLUMNS = ("track_id", "frame", "x", "y", "interpolated")
@@ -314,6 +315,7 @@ def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[s
     path = Path(path)
     names, label_rows = _point_columns(path)
     table = read_table(path, required=tuple(names), integer=tuple(names)[:1], others_as_text=others_as_text, label_rows=label_rows)
+    check_member(path)
     if label_rows or tuple(names) != ("frame", "x", "y"):
         table = {names.get(name, name): values for name, values in table.items()}
         for name in ("frame", "x", "y"):

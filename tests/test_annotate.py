@@ -267,14 +267,21 @@ class Page:
         ActionChains(self.browser).send_keys(key).perform()
         self.actions += 1
 
-    def click(self, x, y):
-        """Click the picture at image position (x, y) and wait for the page to take it in."""
+    def click(self, x, y, shift=False):
+        """Click the picture at image position (x, y) (with shift held: another track's point is
+        taken without asking) and wait for the page to take it in."""
         from selenium.webdriver.common.action_chains import ActionChains
+        from selenium.webdriver.common.keys import Keys
 
         edits = len(self.state("edits"))
         sx, sy = self.browser.execute_script("return window.annotate.toScreen(arguments[0], arguments[1])", float(x), float(y))
         width, height = self.browser.execute_script("return [arguments[0].clientWidth, arguments[0].clientHeight]", self.canvas)
-        ActionChains(self.browser).move_to_element_with_offset(self.canvas, round(sx - width / 2), round(sy - height / 2)).click().perform()
+        chain = ActionChains(self.browser).move_to_element_with_offset(self.canvas, round(sx - width / 2), round(sy - height / 2))
+        if shift:
+            chain = chain.key_down(Keys.SHIFT).click().key_up(Keys.SHIFT)
+        else:
+            chain = chain.click()
+        chain.perform()
         self.actions += 1
         _wait(self.browser, f"return window.annotate.state.edits.length > {edits}")
 
@@ -292,7 +299,7 @@ def test_three_wrong_links_fixed_by_two_actions_each(browser, dish, tmp_path):
         # Up to the wrong link the track is its true self: the true track it was in the frame before.
         previous = server.session.tracks.xy[list(server.session.tracks.track_ids).index(track), frame - 1]
         true_id = next(t for t, xy in truth_xy.items() if np.allclose(xy[frame - 1], previous))
-        page.click(*truth_xy[true_id][frame])
+        page.click(*truth_xy[true_id][frame], shift=True)
     server.shutdown()
     assert page.actions == 2 * len(SWAPS)
     assert _rows(read_tracks(tmp_path / TRACKS)) == _rows(truth)

@@ -13,6 +13,7 @@ from seedtrack.tracking.metrics import UNMATCHED, match_points
 from seedtrack.tracking.tracks import Tracks
 
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..frame_output import write_frames
 from ..drawing import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
 from ..wording import CLIP_INPUT_HELP, counted
@@ -73,6 +74,7 @@ def _short_name(path: Path, other: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
+    refuse_replacing_inputs([args.input, args.a, args.b], [args.out])
     if not (args.tol > 0 and math.isfinite(args.tol)):
         raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
     a = read_tracks(args.a, args.format_a)

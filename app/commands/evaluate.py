@@ -23,7 +23,10 @@ from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 
+# The files --out DIR receives.
+EVALUATION_FILES = ("evaluation.json", "wrong_tracks.csv", "errors.png")
 DEFAULT_TOLERANCE = 3.0
 # A result matching fewer true points than this is checked against the truth one frame off.
 _WELL_MATCHED = 0.9
@@ -146,6 +149,7 @@ def check_tolerance(tol: float) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_tolerance(args.tol)
+    refuse_replacing_inputs([args.tracks, args.truth], [args.out / name for name in EVALUATION_FILES] if args.out is not None else [])
     measures, clear, wrong, hint = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
     print(format_table(measures))
     if hint is not None:

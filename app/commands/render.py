@@ -16,6 +16,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import write_png
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..frame_output import output_kind, write_frames
 from ..drawing import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
 from ..wording import CLIP_INPUT_HELP, counted
@@ -181,6 +182,7 @@ def check_fits(path: Path, frame, x, y, source: FrameSource, clip: Path, what: s
 
 def run(args: argparse.Namespace) -> int:
     kind = check_view_options(args)
+    refuse_replacing_inputs([args.input, args.tracks, args.detections], [args.out, args.summary])
     tracks = read_tracks(args.tracks, args.format)
     detections = read_points(args.detections) if args.detections is not None else None
     print(draw(args, kind, tracks, detections))

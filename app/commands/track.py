@@ -21,6 +21,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from ..allocation import return_freed_memory
 from ..errors import UsageError, option_name, output_file
+from ..outputs import refuse_replacing_inputs
 from ..points import Points, group_points, point_rows, track_frames
 from ..wording import counted
 from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
@@ -243,6 +244,7 @@ def run(args: argparse.Namespace) -> int:
     # Now rather than after a long tracking run.
     check_target(args.out)
     output_format(args.out)
+    refuse_replacing_inputs([args.points], [args.out])
     points = read_points(args.points)
     tracks = track_points(points, args)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
