@@ -313,9 +313,10 @@ def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[s
     array([1., 2.])
     """
     path = Path(path)
+    # First: a set left half in place by a killed run is finished before its file is read.
+    check_member(path)
     names, label_rows = _point_columns(path)
     table = read_table(path, required=tuple(names), integer=tuple(names)[:1], others_as_text=others_as_text, label_rows=label_rows)
-    check_member(path)
     if label_rows or tuple(names) != ("frame", "x", "y"):
         table = {names.get(name, name): values for name, values in table.items()}
         for name in ("frame", "x", "y"):

@@ -60,10 +60,10 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
         has two points in one frame.
     """
     path = Path(path)
-    name = _check_format(format) if format is not None else _sniff(path)
-    tracks = rows_to_tracks(path, FORMATS[name].read(path))
+    # First: a set left half in place by a killed run is finished before its file is read.
     check_member(path)
-    return tracks
+    name = _check_format(format) if format is not None else _sniff(path)
+    return rows_to_tracks(path, FORMATS[name].read(path))
 
 
 def write_tracks(

@@ -308,3 +308,404 @@ def test_ctrl_c_during_start_up_is_one_line_and_130(tmp_path, capsys, monkeypatc
     status = main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv")])
     err = capsys.readouterr().err
     assert status == 130 and err == "seedtrack track: interrupted; files already written are complete\n"
+
+
+# === issue 32: never overwrite what the user has; never accept what the project cannot read back ===
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` (hidden ones included), by relative path, with its bytes."""
+    return {str(path.relative_to(folder)): path.read_bytes() for path in sorted(folder.rglob("*")) if path.is_file()}
+
+
+def _visible(folder: Path) -> dict[str, bytes]:
+    return {name: data for name, data in _snapshot(folder).items() if not name.startswith(".")}
+
+
+@pytest.fixture(scope="module")
+def other_clip(tmp_path_factory):
+    """Another small dish clip of the same size: an older run's input."""
+    folder = tmp_path_factory.mktemp("other")
+    write_dish_clip(DishSpec(seeds=5, frames=8, width=320, height=240, rim_speed=6.0, random_seed=9), folder)
+    return folder
+
+
+# --- 1. an output never replaces an input -------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["render", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/x.mp4"],
+        ["render", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/./x.mp4"],
+        ["render", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/hard.mp4"],
+        ["render", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/link.mp4"],
+        ["render", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/f.png", "--summary", "{w}/t.csv"],
+        ["compare", "{w}/x.mp4", "{w}/t.csv", "{w}/t.csv", "--out", "{w}/hard.mp4"],
+        ["run", "{w}/set/overlay.mp4", "--out", "{w}/set"],
+        ["detect", "{w}/p.csv", "--out", "{w}/p.csv"],
+        ["track", "{w}/p.csv", "--out", "{w}/p.csv"],
+        ["track", "{w}/p.csv", "--out", "{w}/sub/../p.csv"],
+        ["correct", "{w}/t.csv", "{w}/e.txt", "--out", "{w}/t.csv"],
+        ["evaluate", "{w}/set/wrong_tracks.csv", "--truth", "{w}/t.csv", "--out", "{w}/set"],
+        ["annotate", "{w}/x.mp4", "{w}/set/tracks.csv", "--out", "{w}/set", "--no-browser"],
+        ["review", "{w}/x.mp4", "{w}/t.csv", "--out", "{w}/x.mp4"],
+        ["batch", "{w}/set/batch.csv", "--out", "{w}/set"],
+    ],
+)
+def test_an_output_that_is_an_input_is_refused_and_the_input_kept(clip, tmp_path, capsys, command):
+    import os
+    import shutil
+
+    w = tmp_path
+    shutil.copy(clip / "clip.mp4", w / "x.mp4")
+    shutil.copy(clip / "truth.csv", w / "t.csv")
+    os.link(w / "x.mp4", w / "hard.mp4")
+    os.symlink(w / "x.mp4", w / "link.mp4")
+    points_file(w / "p.csv", walkers())
+    (w / "e.txt").write_text("delete 1\n")
+    (w / "sub").mkdir()
+    (w / "set").mkdir()
+    for name in ("overlay.mp4", "tracks.csv", "wrong_tracks.csv", "batch.csv"):
+        shutil.copy(w / ("x.mp4" if name.endswith(".mp4") else "t.csv"), w / "set" / name)
+    before = _snapshot(w)
+    line = one_line_error(capsys, *[part.format(w=w) for part in command])
+    assert "is an input of this command" in line and "would replace the input" in line
+    assert _snapshot(w) == before
+
+
+def test_an_output_in_a_folder_of_frames_read_as_input_is_refused(tmp_path, capsys):
+    import cv2
+
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(frames / f"f{k}.png"), np.full((40, 40), 60 * k, np.uint8))
+    points_file(tmp_path / "t.csv", [(0, k, 10, 10) for k in range(3)], "track_id,frame,x,y")
+    before = _snapshot(tmp_path)
+    assert "a folder of frames read as input" in one_line_error(capsys, "render", frames, tmp_path / "t.csv", "--out", frames / "over.png")
+    assert _snapshot(tmp_path) == before
+
+
+# --- 2. a run's files as one set -----------------------------------------------------------------
+
+
+RUN_SET = ["detections.csv", "manifest.json", "overlay.mp4", "tracks.csv"]
+
+
+def test_run_writes_a_manifest_last_naming_inputs_and_files(clip, tmp_path, capsys):
+    import hashlib
+    import json
+
+    assert run(capsys, "run", clip / "clip.mp4", "--out", tmp_path / "out", "--workers", "1")[0] == 0
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == RUN_SET
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert manifest["command"] == "seedtrack run" and manifest["seedtrack"]
+    clip_bytes = (clip / "clip.mp4").read_bytes()
+    assert manifest["inputs"] == [{"path": str(clip / "clip.mp4"), "size": len(clip_bytes), "sha256": hashlib.sha256(clip_bytes).hexdigest()}]
+    for entry in manifest["files"]:
+        data = (tmp_path / "out" / entry["name"]).read_bytes()
+        assert entry["size"] == len(data) and entry["sha256"] == hashlib.sha256(data).hexdigest()
+
+
+def test_readers_say_when_a_set_lacks_its_manifest_or_mixes_runs(clip, other_clip, tmp_path, capsys):
+    import shutil
+
+    from seedtrack.data.errors import DataWarning
+
+    for name, source in (("a", clip), ("b", other_clip)):
+        assert run(capsys, "run", source / "clip.mp4", "--out", tmp_path / name, "--workers", "1")[0] == 0
+    with warnings_as_list() as caught:
+        read_tracks(tmp_path / "a" / "tracks.csv")
+    assert caught == []
+    shutil.copy(tmp_path / "b" / "tracks.csv", tmp_path / "a" / "tracks.csv")
+    with pytest.warns(DataWarning, match=r"tracks.csv: is not the file manifest.json lists \(another run's"):
+        read_tracks(tmp_path / "a" / "tracks.csv")
+    shutil.copy(tmp_path / "b" / "overlay.mp4", tmp_path / "b" / "overlay.copy")
+    shutil.copy(tmp_path / "a" / "overlay.mp4", tmp_path / "b" / "overlay.mp4")
+    with pytest.warns(DataWarning, match="overlay.mp4 beside it is not the file manifest.json lists: the folder mixes two runs"):
+        read_tracks(tmp_path / "b" / "tracks.csv")
+    (tmp_path / "b" / "manifest.json").unlink()
+    status, _, err = run(capsys, "evaluate", tmp_path / "b" / "tracks.csv", "--truth", other_clip / "truth.csv")
+    assert status == 0 and "warning: " in err and "no manifest.json beside it: not known to be of one run" in err
+
+
+def warnings_as_list():
+    import warnings
+
+    return warnings.catch_warnings(record=True)
+
+
+def test_a_failed_run_into_an_old_runs_folder_keeps_the_old_set(clip, other_clip, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "out"
+    assert run(capsys, "run", other_clip / "clip.mp4", "--out", out, "--workers", "1")[0] == 0
+    old = _snapshot(out)
+    monkeypatch.setattr("seedtrack.data.trackfile.write_rows", _no_space)
+    line = one_line_error(capsys, "run", clip / "clip.mp4", "--out", out, "--workers", "1")
+    assert "No space left on device" in line
+    assert _snapshot(out) == old
+
+
+def _run_killed_at(event: int, args: list[str], count_file: Path) -> int:
+    """Run ``seedtrack ARGS`` in a forked child that kills itself with SIGKILL at its ``event``-th
+    step: a stage of the pipeline, a frame drawn, or a file system call that writes, renames,
+    syncs or removes. Returns the child's wait status; the child writes the steps it took if it
+    was not killed."""
+    import os
+    import signal
+
+    pid = os.fork()
+    if pid:
+        return os.waitpid(pid, 0)[1]
+    try:
+        import seedtrack.pipeline as pipeline
+
+        taken = [0]
+
+        def counted(function):
+            def step(*a, **k):
+                taken[0] += 1
+                if taken[0] == event:
+                    os.kill(os.getpid(), signal.SIGKILL)
+                return function(*a, **k)
+
+            return step
+
+        for name in ("detect_clip", "write_table", "track_frames", "write_tracks", "_render", "_annotate_pair"):
+            setattr(pipeline, name, counted(getattr(pipeline, name)))
+        for name in ("replace", "fsync", "unlink", "rename"):
+            setattr(os, name, counted(getattr(os, name)))
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        status = main(args)
+        count_file.write_text(str(taken[0]))
+        os._exit(status)
+    finally:
+        os._exit(99)
+
+
+def test_kill_9_at_20_points_through_run_leaves_the_old_set_or_the_new_one_whole(clip, other_clip, tmp_path, capsys):
+    import os
+    import shutil
+
+    from seedtrack.data.errors import DataWarning
+    from seedtrack.data.outputset import JOURNAL
+
+    old_folder, new_folder, out = tmp_path / "old", tmp_path / "new", tmp_path / "out"
+    args = ["run", str(clip / "clip.mp4"), "--out", str(out), "--workers", "1"]
+    assert run(capsys, "run", other_clip / "clip.mp4", "--out", old_folder, "--workers", "1")[0] == 0
+    shutil.copytree(old_folder, out)
+    counts = tmp_path / "steps.txt"
+    assert _run_killed_at(10**9, args, counts) == 0
+    new = _visible(out)
+    shutil.copytree(out, new_folder)
+    old = _visible(old_folder)
+    assert set(new) == set(old) == set(RUN_SET) and all(new[name] != old[name] for name in RUN_SET)
+    steps = int(counts.read_text())
+    points = sorted(set(np.linspace(1, steps, 20).round().astype(int)))
+    assert len(points) == 20
+    seen = {"old": 0, "new": 0, "finished by the next reader": 0}
+    for event in points:
+        shutil.rmtree(out)
+        shutil.copytree(old_folder, out)
+        status = _run_killed_at(event, args, counts)
+        assert os.WIFSIGNALED(status), event
+        if (out / JOURNAL).exists():
+            # The next reader of a file of the set finishes putting it in place, and says so.
+            with pytest.warns(DataWarning, match="finished putting in place the files of a run that was stopped part-way"):
+                assert read_tracks(out / "tracks.csv").n_tracks == read_tracks(new_folder / "tracks.csv").n_tracks
+            assert _visible(out) == new, event
+            seen["finished by the next reader"] += 1
+        else:
+            now = _visible(out)
+            assert now in (old, new), f"killed at step {event} of {steps}: a mix of two runs"
+            seen["old" if now == old else "new"] += 1
+    # The kills span the run: some before its set was committed, some after.
+    assert seen["old"] >= 10 and seen["new"] + seen["finished by the next reader"] >= 2, seen
+    # A new run into a folder where one was killed cleans up the killed run's temporaries.
+    assert run(capsys, *args)[0] == 0 and _snapshot(out) == new
+
+
+# --- 3. annotate: every edit checked as the readers check it ------------------------------------
+
+
+@pytest.fixture
+def annotating(clip, tmp_path):
+    import threading
+
+    from seedtrack.annotate.frames import FrameCache
+    from seedtrack.annotate.server import AnnotateServer
+    from seedtrack.annotate.session import Session
+
+    out = tmp_path / "session"
+    out.mkdir()
+    server = AnnotateServer(Session(read_tracks(clip / "truth.csv"), out, clip / "truth.csv"), FrameCache(clip / "clip.mp4"))
+    threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
+    yield server
+    server.shutdown()
+    server.server_close()
+    server.frames.close()
+
+
+def _post(server, path, body):
+    import http.client
+    import json
+
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+    connection.request("POST", f"{path}?token={server.token}", body=json.dumps(body), headers={"Host": f"127.0.0.1:{server.port}"})
+    response = connection.getresponse()
+    reply = json.loads(response.read())
+    connection.close()
+    return response.status, reply
+
+
+@pytest.mark.parametrize(
+    "path, body, reason",
+    [
+        ("/api/click", {"frame": 3, "x": 1e308, "y": 20}, "x must lie inside the 320x240 frame"),
+        ("/api/click", {"frame": 3, "x": 20, "y": -3}, "y must lie inside the 320x240 frame"),
+        ("/api/click", {"frame": 3, "x": 320, "y": 20}, "x must lie inside"),
+        ("/api/click", {"frame": 99999, "x": 20, "y": 20}, "frame must be a frame of the clip, 0..7, got 99999"),
+        ("/api/click", {"frame": 8, "x": 20, "y": 20}, "frame must be a frame of the clip"),
+        ("/api/click", {"frame": -1, "x": 20, "y": 20}, "frame must be a frame of the clip"),
+        ("/api/click", {"frame": 2, "x": "20", "y": 20}, "x must be a finite number"),
+        ("/api/click", {"frame": 2, "x": 20, "y": None}, "y must be a finite number"),
+        ("/api/click", {"frame": 2.5, "x": 20, "y": 20}, "frame must be a whole number"),
+        ("/api/click", {"frame": 2, "x": 20, "y": 20, "selected": 2**70}, "selected must be at most"),
+        ("/api/split", {"track": 1, "frame": 99999}, "frame must be a frame of the clip"),
+        ("/api/delete", {"track": 1, "frame": 8}, "frame must be a frame of the clip"),
+        ("/api/delete", {"track": True}, "track must be a whole number"),
+    ],
+)
+def test_annotate_refuses_an_edit_the_readers_would_refuse(annotating, path, body, reason):
+    folder = annotating.session.folder
+    before = _snapshot(folder)
+    status, reply = _post(annotating, path, body)
+    assert status == 400 and reason in reply["error"], reply
+    assert _snapshot(folder) == before
+
+
+def test_annotate_edits_at_the_frames_edge_are_read_back_by_correct_and_render(annotating, clip, tmp_path, capsys):
+    assert _post(annotating, "/api/click", {"frame": 7, "x": 319.5, "y": -0.5})[0] == 200
+    assert _post(annotating, "/api/click", {"frame": 0, "x": -0.5, "y": 239.5})[0] == 200
+    folder = annotating.session.folder
+    assert run(capsys, "correct", clip / "truth.csv", folder / "corrections.txt", "--out", tmp_path / "c.csv")[0] == 0
+    assert (tmp_path / "c.csv").read_bytes() == (folder / "tracks.csv").read_bytes()
+    assert run(capsys, "render", clip / "clip.mp4", folder / "tracks.csv", "--out", tmp_path / "r.png")[0] == 0
+
+
+def test_a_click_on_another_tracks_point_says_what_it_would_do_first(annotating):
+    session = annotating.session
+    rows = session.tracks.to_rows()
+    frame = 4
+    a, b = (int(t) for t in sorted(set(rows["track_id"][rows["frame"] == frame]))[:2])
+    at_b = (rows["track_id"] == b) & (rows["frame"] == frame)
+    x, y = float(rows["x"][at_b][0]), float(rows["y"][at_b][0])
+    before = _snapshot(session.folder)
+    status, reply = _post(annotating, "/api/click", {"selected": a, "frame": frame, "x": x, "y": y})
+    assert status == 409 and reply["reassign"] == f"this is track {b}'s point: the click would swap tracks {a} and {b} from frame {frame} on"
+    assert _snapshot(session.folder) == before and session.edits == []
+    status, reply = _post(annotating, "/api/click", {"selected": a, "frame": frame, "x": x, "y": y, "reassign": True})
+    assert status == 200 and reply["edits"] == [f"swap {a} {b} {frame}"]
+
+
+def test_the_page_asks_before_taking_another_tracks_point():
+    from importlib import resources
+
+    script = resources.files("seedtrack.annotate").joinpath("static", "app.js").read_text()
+    # The server's 409 is shown to the user, who says yes before the click is sent again.
+    assert "response.status === 409 && reply.reassign" in script and "window.confirm(" in script
+    assert "reassign: true" in script and "pointAt(event.offsetX, event.offsetY, event.shiftKey)" in script
+
+
+def test_the_replay_line_of_corrections_txt_works_in_the_folder_it_names(clip, tmp_path, monkeypatch):
+    import os
+    import shutil
+
+    from seedtrack.annotate.session import Session
+
+    start_folder = tmp_path / "run 1"
+    start_folder.mkdir()
+    shutil.copy(clip / "truth.csv", start_folder / "tracks.csv")
+    folder = tmp_path / "truth ü"
+    folder.mkdir()
+    # Started from a third folder with relative names, as a user would.
+    monkeypatch.chdir(tmp_path)
+    session = Session(read_tracks("run 1/tracks.csv"), Path("truth ü"), Path("run 1/tracks.csv"))
+    session.delete(2, 5)
+    session.click(1, 6, 100.0, 100.0)
+    saved = (folder / "tracks.csv").read_bytes()
+    header = (folder / "corrections.txt").read_text().splitlines()[:2]
+    assert header[0].endswith(f"in {folder}, apply with")
+    (folder / "tracks.csv").unlink()
+    command = header[1].removeprefix("#").strip()
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+    result = subprocess.run(command, shell=True, cwd=folder, env=env, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert (folder / "tracks.csv").read_bytes() == saved
+
+
+# --- 4. workers, escaped text, a client that goes away ---------------------------------------
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", "{clip}/clip.mp4", "--out", "{out}", "--workers", "1000"],
+        ["batch", "{clip}/clip.mp4", "--out", "{out}", "--workers", "1000"],
+        ["experiment", "density", "--out", "{out}", "--jobs", "1000", "--tiny"],
+    ],
+)
+def test_more_workers_than_the_machine_can_run_is_one_line(clip, tmp_path, capsys, command):
+    import os
+
+    out = tmp_path / "out"
+    line = one_line_error(capsys, *[part.format(clip=clip, out=out) for part in command])
+    assert "1000 is more than this machine can run: at most" in line and f"{os.cpu_count()} cores" in line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "content, shown",
+    [
+        (b"fr\x1b[2Jame,x,y\n0,1,2\n", "found fr\\x1b[2Jame, x, y"),
+        (b"frame,x,y\n0,\x01\x07\x1b[31m,2\n", "holds '\\x01\\x07\\x1b[31m'"),
+        (b"frame,x,y\n0,1,2\x00\x00\n", None),
+        (bytes(range(256)) * 8, None),
+        (b"\x7fELF\x02\x01\x01" + bytes(4000), None),
+    ],
+)
+def test_a_binary_file_given_as_csv_is_named_in_printable_text(tmp_path, capsys, content, shown):
+    (tmp_path / "points.csv").write_bytes(content)
+    line = one_line_error(capsys, "track", tmp_path / "points.csv", "--out", tmp_path / "t.csv")
+    assert line.isprintable() and len(line) < 1200, line
+    if shown is not None:
+        assert shown in line
+
+
+def test_a_huge_header_makes_a_line_of_bounded_length(tmp_path, capsys):
+    (tmp_path / "points.csv").write_text("frame," + "y" * 100_000 + ",x\n0,1,2\n")
+    line = one_line_error(capsys, "track", tmp_path / "points.csv", "--out", tmp_path / "t.csv")
+    assert "characters left out" in line and len(line) < 1200
+
+
+def test_a_client_that_goes_away_prints_nothing(annotating, capfd):
+    import socket
+    import struct
+    import time
+
+    for _ in range(5):
+        client = socket.create_connection(("127.0.0.1", annotating.port))
+        client.sendall(f"GET /api/frame?i=0&token={annotating.token} HTTP/1.1\r\nHost: 127.0.0.1:{annotating.port}\r\n\r\n".encode())
+        # Closed at once with a reset: the server's answer meets a connection that is gone.
+        client.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        client.close()
+    time.sleep(0.5)
+    for error in (BrokenPipeError, ConnectionResetError):
+        try:
+            raise error(32, "gone")
+        except error:
+            annotating.handle_error(None, ("127.0.0.1", 1))
+    assert capfd.readouterr().err == ""
+    assert _post(annotating, "/api/undo", {})[0] == 200, "and the server goes on answering"
