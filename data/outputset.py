@@ -94,6 +94,10 @@ class OutputSet:
             self.names.append(name)
         return self.folder / self._temporary(name)
 
+    def name_of(self, path: str | os.PathLike) -> str | None:
+        """The name in the set of a temporary file :meth:`path` gave, or None."""
+        return next((name for name in self.names if Path(path) == self.path(name)), None)
+
     def _temporary(self, name: str) -> str:
         return f"{_TEMPORARY}{os.getpid()}-{name}"
 
@@ -159,6 +163,13 @@ def output_set(folder: str | os.PathLike, command: str, inputs: Iterable[str | o
         files = OutputSet(made, command, inputs, ours)
         try:
             yield files
+        except DataError as error:
+            files.discard()
+            # The user named the folder, not the temporary: the message names the file of the set.
+            name = files.name_of(error.path)
+            if name is None:
+                raise
+            raise DataError(made / name, error.problem) from None
         except BaseException:
             files.discard()
             raise

@@ -709,3 +709,193 @@ def test_a_client_that_goes_away_prints_nothing(annotating, capfd):
             annotating.handle_error(None, ("127.0.0.1", 1))
     assert capfd.readouterr().err == ""
     assert _post(annotating, "/api/undo", {})[0] == 200, "and the server goes on answering"
+
+
+# --- 5. a sweep of what a hostile user would try ------------------------------------------------
+# Each case makes its inputs in a fresh folder and gives the arguments; the command must end in
+# one line and exit 2 (with the words given), or succeed; either way every file that was there
+# before is byte-identical after, and a refused command adds none.
+
+
+def _points(w, name="points.csv", text="frame,x,y\n" + "".join(f"{k},{20 + 15 * i + 3 * k},{30 + 10 * i}\n" for k in range(6) for i in range(5))):
+    path = w / name
+    path.write_bytes(text.encode() if isinstance(text, str) else text)
+    return path
+
+
+def _clip_copy(w, clip):
+    import shutil
+
+    shutil.copy(clip / "clip.mp4", w / "clip.mp4")
+    shutil.copy(clip / "truth.csv", w / "truth.csv")
+    return w / "clip.mp4"
+
+
+def _track(w, points_text, *options):
+    return ["track", _points(w, text=points_text), "--out", w / "tracks.csv", *options]
+
+
+def _render(w, clip, *options, out="r.mp4"):
+    return ["render", _clip_copy(w, clip), w / "truth.csv", "--out", w / out, *options]
+
+
+def _correct(w, clip, edits):
+    _clip_copy(w, clip)
+    (w / "edits.txt").write_bytes(edits)
+    return ["correct", w / "truth.csv", w / "edits.txt", "--out", w / "fixed.csv"]
+
+
+def _run(w, clip, *options):
+    return ["run", _clip_copy(w, clip), "--out", w / "out", "--workers", "1", *options]
+
+
+def _denied(monkeypatch, name):
+    import builtins
+
+    real = builtins.open
+
+    def guarded(file, *args, **kwargs):
+        if str(file).endswith(name):
+            raise PermissionError(errno.EACCES, "Permission denied", str(file))
+        return real(file, *args, **kwargs)
+
+    # Tests run as root, whom file modes do not stop: the refusal is made here instead.
+    monkeypatch.setattr(builtins, "open", guarded)
+
+
+def _read_only_folder(monkeypatch):
+    import tempfile
+
+    def refused(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", refused)
+
+
+def _interrupt(monkeypatch, where):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(where, interrupted)
+
+
+def _fifo(path):
+    import os
+
+    os.mkfifo(path)
+    return path
+
+
+def _loop(path):
+    import os
+
+    os.symlink(path.name, path)
+    return path
+
+
+def _after_an_old_run(w, clip, monkeypatch, stage, fault=_interrupt):
+    assert main([str(a) for a in _run(w, clip)]) == 0
+    fault(monkeypatch, stage)
+    return _run(w, clip, "--threshold", "30")
+
+
+HEADER = "frame,x,y\n"
+HOSTILE = {
+    # points given to `track`
+    "empty file": (lambda w, c, m: _track(w, ""), "is empty"),
+    "header only": (lambda w, c, m: _track(w, HEADER), "no points (only a header)"),
+    "a folder as the points": (lambda w, c, m: ["track", (w / "p.csv").mkdir() or w / "p.csv", "--out", w / "t.csv"], "is a folder"),
+    "points unreadable": (lambda w, c, m: _denied(m, "points.csv") or _track(w, HEADER + "0,1,2\n"), "Permission denied"),
+    "unicode path": (lambda w, c, m: ["track", _points(w, "pünkte ✓ 点.csv"), "--out", w / "spür ✓.csv"], "ok"),
+    "spaces in paths": (lambda w, c, m: ["track", _points(w, "my points.csv"), "--out", w / "my tracks.csv"], "ok"),
+    "x = 1e400 (infinite)": (lambda w, c, m: _track(w, HEADER + "0,1e400,2\n1,2,2\n"), "not a finite number"),
+    "negative frame": (lambda w, c, m: _track(w, HEADER + "-1,1,2\n0,2,2\n"), "out of range"),
+    "frame 1e12": (lambda w, c, m: _track(w, HEADER + "0,1,2\n1000000000000,2,2\n"), "out of range"),
+    "duplicate columns": (lambda w, c, m: _track(w, "frame,x,y,x\n0,1,2,3\n1,2,2,3\n"), "column(s) x appear more than once"),
+    "NaN in x": (lambda w, c, m: _track(w, HEADER + "0,nan,2\n1,2,2\n"), "not a finite number"),
+    "inf in y": (lambda w, c, m: _track(w, HEADER + "0,1,inf\n1,2,2\n"), "not a finite number"),
+    "empty field": (lambda w, c, m: _track(w, HEADER + "0,,2\n1,2,2\n"), "is empty"),
+    "CRLF line ends": (lambda w, c, m: _track(w, "frame,x,y\r\n0,1,2\r\n1,2,2\r\n"), "ok"),
+    "byte-order mark": (lambda w, c, m: _track(w, "\ufeffframe,x,y\n0,1,2\n1,2,2\n"), "ok"),
+    "semicolons": (lambda w, c, m: _track(w, "frame;x;y\n0;1;2\n1;2;2\n"), "missing column"),
+    "frame 1.5": (lambda w, c, m: _track(w, HEADER + "0,1,2\n1.5,2,2\n"), "not a whole number"),
+    "no y column": (lambda w, c, m: _track(w, "frame,x\n0,1\n"), "missing column"),
+    "ragged row": (lambda w, c, m: _track(w, HEADER + "0,1,2,7,8\n1,2,2\n"), "a row has more fields than the header's 3"),
+    "a longer row further on": (lambda w, c, m: _track(w, HEADER + "0,1,2\n1,2,2,5\n"), "line 3 has 4 fields, the header has 3"),
+    "--max-speed -1": (lambda w, c, m: _track(w, HEADER + "0,1,2\n", "--max-speed", "-1"), "--max-speed"),
+    "--max-speed nan": (lambda w, c, m: _track(w, HEADER + "0,1,2\n", "--max-speed", "nan"), "--max-speed"),
+    "--max-gap -1": (lambda w, c, m: _track(w, HEADER + "0,1,2\n", "--max-gap", "-1"), "--max-gap"),
+    "--phi-max nan": (lambda w, c, m: _track(w, HEADER + "0,1,2\n", "--phi-max", "nan"), "--phi-max"),
+    # where the output goes
+    "output folder missing": (lambda w, c, m: ["track", _points(w), "--out", w / "no" / "t.csv"], "does not exist"),
+    "output folder read-only": (lambda w, c, m: _read_only_folder(m) or ["track", _points(w), "--out", w / "t.csv"], "cannot write here (Permission denied)"),
+    "output is a folder": (lambda w, c, m: ["track", _points(w), "--out", (w / "t.csv").mkdir() or w / "t.csv"], "is a folder"),
+    "output is a pipe": (lambda w, c, m: ["track", _points(w), "--out", _fifo(w / "t.csv")], "is not a regular file"),
+    "disk full": (lambda w, c, m: m.setattr("pandas.DataFrame.to_csv", _no_space) or ["track", _points(w), "--out", w / "t.csv"], "No space left on device"),
+    "points are a symlink loop": (lambda w, c, m: ["track", _loop(w / "loop.csv"), "--out", w / "t.csv"], "loop.csv"),
+    "points are a pipe": (lambda w, c, m: ["track", _fifo(w / "pipe.csv"), "--out", w / "t.csv"], "not a regular file"),
+    "Ctrl-C while tracking": (lambda w, c, m: _interrupt(m, "seedtrack.commands.track.track_points") or ["track", _points(w), "--out", w / "t.csv"], "interrupted"),
+    # render
+    "--scale nan": (lambda w, c, m: _render(w, c, "--scale", "nan"), "--scale"),
+    "--step 0": (lambda w, c, m: _render(w, c, "--step", "0"), "--step must be at least 1"),
+    "--trail -1": (lambda w, c, m: _render(w, c, "--trail", "-1"), "--trail"),
+    "--crop empty": (lambda w, c, m: _render(w, c, "--crop", "5,5,5,5"), "--crop"),
+    "--crop words": (lambda w, c, m: _render(w, c, "--crop", "a,b,c,d"), "--crop"),
+    "--end before --start": (lambda w, c, m: _render(w, c, "--start", "5", "--end", "2"), "end must be a frame index after start (5), got 2"),
+    "--fps 0": (lambda w, c, m: _render(w, c, "--fps", "0"), "--fps"),
+    "--frame past the clip": (lambda w, c, m: _render(w, c, "--frame", "1000000000", out="r.png"), "past the last frame"),
+    "output .avi": (lambda w, c, m: _render(w, c, out="r.avi"), "unsupported output extension"),
+    "binary tracks": (lambda w, c, m: ["render", _clip_copy(w, c), _points(w, "t.csv", bytes(range(256))), "--out", w / "r.png"], "t.csv"),
+    # evaluate, correct
+    "--tol 0": (lambda w, c, m: ["evaluate", _clip_copy(w, c) and w / "truth.csv", "--truth", w / "truth.csv", "--tol", "0"], "--tol"),
+    "--tol nan": (lambda w, c, m: ["evaluate", _clip_copy(w, c) and w / "truth.csv", "--truth", w / "truth.csv", "--tol", "nan"], "--tol"),
+    "edit of no such verb": (lambda w, c, m: _correct(w, c, b"explode 1 2\n"), "unknown edit"),
+    "edit at frame -1": (lambda w, c, m: _correct(w, c, b"delete 1 -1\n"), "frame must be >= 0"),
+    "edit at x 1e308": (lambda w, c, m: _correct(w, c, b"move 1 2 1e308 5\n"), "out of range"),
+    "binary edits": (lambda w, c, m: _correct(w, c, b"\x00\xff\xfe\x1b[2J" * 50), "edits.txt"),
+    # run
+    "--workers 0": (lambda w, c, m: _run(w, c, "--workers", "0"), "--workers must be a whole number >= 1"),
+    "--workers -5": (lambda w, c, m: _run(w, c, "--workers", "-5"), "--workers must be a whole number >= 1"),
+    "--workers a million": (lambda w, c, m: _run(w, c, "--workers", "1000000"), "more than this machine can run"),
+    "a folder with no images": (lambda w, c, m: ["run", (w / "frames").mkdir() or w / "frames", "--out", w / "out"], "no images"),
+    "an empty .mp4": (lambda w, c, m: ["run", _points(w, "e.mp4", b""), "--out", w / "out"], "e.mp4"),
+    "text named .mp4": (lambda w, c, m: ["run", _points(w, "t.mp4", "hello\n"), "--out", w / "out"], "t.mp4"),
+    "--out is a file": (lambda w, c, m: ["run", _clip_copy(w, c), "--out", w / "truth.csv"], "is not a folder"),
+    "--start -1": (lambda w, c, m: _run(w, c, "--start", "-1"), "--start"),
+    "--roi radius -5": (lambda w, c, m: _run(w, c, "--roi", "10,10,-5"), "--roi"),
+    "--threshold nan": (lambda w, c, m: _run(w, c, "--threshold", "nan"), "--threshold"),
+    "Ctrl-C while tracking into an old run's folder": (lambda w, c, m: _after_an_old_run(w, c, m, "seedtrack.pipeline.track_frames"), "interrupted"),
+    "Ctrl-C while drawing into an old run's folder": (lambda w, c, m: _after_an_old_run(w, c, m, "seedtrack.pipeline._render"), "interrupted"),
+    "disk full in an old run's folder": (lambda w, c, m: _after_an_old_run(w, c, m, "pandas.DataFrame.to_csv", lambda m, where: m.setattr(where, _no_space)), "out/detections.csv: could not be written (No space left on device)"),
+    # other commands
+    "synth --tracks 0": (lambda w, c, m: ["synth", "psmg", "--out", w / "s", "--tracks", "0"], "--tracks"),
+    "synth --frames 1e9": (lambda w, c, m: ["synth", "psmg", "--out", w / "s", "--frames", "1000000000"], "--frames"),
+    "demo --seeds ten million": (lambda w, c, m: ["demo", "--out", w / "d", "--seeds", "10000000"], "at most 623 seeds fit on the dish"),
+    "demo --seeds 400": (lambda w, c, m: ["demo", "--out", w / "d", "--seeds", "400", "--frames", "3"], "only 320 of 400 seeds fit"),
+    "annotate --port 70000": (lambda w, c, m: ["annotate", _clip_copy(w, c), "--out", w / "a", "--port", "70000", "--no-browser"], "--port"),
+    "TrackMate XML cut short": (lambda w, c, m: ["evaluate", _points(w, "t.xml", "<TrackMate><Model><AllTracks>"), "--truth", _clip_copy(w, c) and w / "truth.csv"], "t.xml"),
+    "a track twice in a frame": (lambda w, c, m: ["evaluate", _points(w, "t.csv", "track_id,frame,x,y\n1,0,5,5\n1,0,6,6\n"), "--truth", w / "t.csv"], "t.csv"),
+}
+
+
+@pytest.mark.parametrize("case", list(HOSTILE))
+def test_a_hostile_user(clip, tmp_path, capsys, monkeypatch, case):
+    make, expected = HOSTILE[case]
+    w = tmp_path / "w"
+    w.mkdir()
+    args = make(w, clip, monkeypatch)
+    capsys.readouterr()  # what making the inputs printed
+    before = _snapshot(w)
+    status, _, err = run(capsys, *args)
+    monkeypatch.undo()
+    assert "Traceback" not in err, err
+    after = _snapshot(w)
+    if expected == "ok":
+        assert status == 0, err
+        assert {name: after[name] for name in before} == before
+        return
+    lines = err.splitlines()
+    assert status == (130 if expected == "interrupted" else 2), err
+    assert len(lines) == 1 and ("error:" in lines[0] or expected == "interrupted"), err
+    assert lines[0].isprintable() and expected in lines[0], lines[0]
+    assert after == before

@@ -10,7 +10,7 @@ import numpy as np
 
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
-from seedtrack.data.numbers import MAX_COORDINATE_PX
+from seedtrack.data.numbers import MAX_COORDINATE_PX, MAX_FRAME
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.trackfile import write_tracks
 
@@ -85,6 +85,9 @@ def psmg_spec(args: argparse.Namespace) -> PSMGSpec:
         raise UsageError(f"--max-speed must be positive, got {args.max_speed:g}")
     if args.tracks < 1 or args.frames < 2:
         raise UsageError(f"need at least 1 track and 2 frames, got --tracks {args.tracks} --frames {args.frames}")
+    if args.frames > MAX_FRAME + 1:
+        # The files would hold frames that every reader refuses.
+        raise UsageError(f"--frames must be at most {MAX_FRAME + 1}, got {args.frames}")
     try:
         return PSMGSpec(
             trajectories=args.tracks,
