@@ -23,7 +23,7 @@ import os
 from pathlib import Path
 from typing import Iterable, Iterator
 
-from .atomic import atomic_path, output_folder
+from .atomic import atomic_path, check_target, output_folder
 from .errors import DataError, warn
 
 MANIFEST = "manifest.json"
@@ -86,11 +86,19 @@ class OutputSet:
         self.inputs = [Path(path) for path in inputs]
         self.version = version
         self.names: list[str] = []
+        self.committed = False
 
     def path(self, name: str) -> Path:
         """Where to write the file ``name`` of the set: a temporary name in the folder, with the
-        same extension, renamed to ``folder/name`` when the set is complete."""
+        same extension, renamed to ``folder/name`` when the set is complete.
+
+        Raises
+        ------
+        DataError
+            If ``folder/name`` is a folder, a pipe or a device (found now, not at the end).
+        """
         if name not in self.names:
+            check_target(self.folder / name)
             self.names.append(name)
         return self.folder / self._temporary(name)
 
@@ -119,10 +127,15 @@ class OutputSet:
             _sync(self.path(name))
         journal = {**self.manifest(), "pending": {name: self._temporary(name) for name in self.names}}
         _write_json(self.folder / JOURNAL, journal)
+        # From here on the journal needs the temporaries, and whoever reads the folder next
+        # finishes what this process does not.
+        self.committed = True
         _finish(self.folder, journal)
 
     def discard(self) -> None:
         """Remove the temporaries written so far; the folder's earlier set stays as it was."""
+        if self.committed:
+            return
         for name in self.names:
             self.path(name).unlink(missing_ok=True)
 
@@ -163,6 +176,7 @@ def output_set(folder: str | os.PathLike, command: str, inputs: Iterable[str | o
         files = OutputSet(made, command, inputs, ours)
         try:
             yield files
+            files.commit()
         except DataError as error:
             files.discard()
             # The user named the folder, not the temporary: the message names the file of the set.
@@ -173,7 +187,6 @@ def output_set(folder: str | os.PathLike, command: str, inputs: Iterable[str | o
         except BaseException:
             files.discard()
             raise
-        files.commit()
 
 
 def finish_interrupted(folder: str | os.PathLike) -> bool:

@@ -862,6 +862,8 @@ HOSTILE = {
     "text named .mp4": (lambda w, c, m: ["run", _points(w, "t.mp4", "hello\n"), "--out", w / "out"], "t.mp4"),
     "--out is a file": (lambda w, c, m: ["run", _clip_copy(w, c), "--out", w / "truth.csv"], "is not a folder"),
     "--start -1": (lambda w, c, m: _run(w, c, "--start", "-1"), "--start"),
+    "a folder named tracks.csv in --out": (lambda w, c, m: (w / "out" / "tracks.csv").mkdir(parents=True) or _run(w, c), "out/tracks.csv: is a folder"),
+    "disk full at the commit": (lambda w, c, m: _after_an_old_run(w, c, m, "json.dump", lambda m, where: m.setattr(where, _no_space)), ".seedtrack-commit.json: could not be written (No space left on device)"),
     "--roi radius -5": (lambda w, c, m: _run(w, c, "--roi", "10,10,-5"), "--roi"),
     "--threshold nan": (lambda w, c, m: _run(w, c, "--threshold", "nan"), "--threshold"),
     "Ctrl-C while tracking into an old run's folder": (lambda w, c, m: _after_an_old_run(w, c, m, "seedtrack.pipeline.track_frames"), "interrupted"),
