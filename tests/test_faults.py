@@ -873,7 +873,6 @@ HOSTILE = {
     "synth --tracks 0": (lambda w, c, m: ["synth", "psmg", "--out", w / "s", "--tracks", "0"], "--tracks"),
     "synth --frames 1e9": (lambda w, c, m: ["synth", "psmg", "--out", w / "s", "--frames", "1000000000"], "--frames"),
     "demo --seeds ten million": (lambda w, c, m: ["demo", "--out", w / "d", "--seeds", "10000000"], "at most 623 seeds fit on the dish"),
-    "demo --seeds 400": (lambda w, c, m: ["demo", "--out", w / "d", "--seeds", "400", "--frames", "3"], "only 320 of 400 seeds fit"),
     "annotate --port 70000": (lambda w, c, m: ["annotate", _clip_copy(w, c), "--out", w / "a", "--port", "70000", "--no-browser"], "--port"),
     "TrackMate XML cut short": (lambda w, c, m: ["evaluate", _points(w, "t.xml", "<TrackMate><Model><AllTracks>"), "--truth", _clip_copy(w, c) and w / "truth.csv"], "t.xml"),
     "a track twice in a frame": (lambda w, c, m: ["evaluate", _points(w, "t.csv", "track_id,frame,x,y\n1,0,5,5\n1,0,6,6\n"), "--truth", w / "t.csv"], "t.csv"),

@@ -110,7 +110,9 @@ class AnnotateServer(ThreadingHTTPServer):
         frame = _whole(body, name)
         count = self.frames.frame_count
         if frame < 0 or (count is not None and frame >= count):
-            raise ValueError(f"{name} must be a frame of the clip, 0..{count - 1 if count is not None else ''}, got {frame}")
+            # A stream's length is not known until its end: only the start bounds it.
+            frames = f"0..{count - 1}" if count is not None else ">= 0"
+            raise ValueError(f"{name} must be a frame of the clip, {frames}, got {frame}")
         return frame
 
     def position_of(self, body: dict) -> tuple[float, float]:
