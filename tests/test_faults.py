@@ -446,20 +446,35 @@ def test_a_failed_run_into_an_old_runs_folder_keeps_the_old_set(clip, other_clip
     assert _snapshot(out) == old
 
 
-def _run_killed_at(event: int, args: list[str], count_file: Path) -> int:
-    """Run ``seedtrack ARGS`` in a forked child that kills itself with SIGKILL at its ``event``-th
-    step: a stage of the pipeline, a frame drawn, or a file system call that writes, renames,
-    syncs or removes. Returns the child's wait status; the child writes the steps it took if it
-    was not killed."""
-    import os
-    import signal
+# Run in a process of its own, which forks once per kill: the child runs `seedtrack ARGS` and
+# kills itself with SIGKILL at its EVENT-th step (a stage of the pipeline, a frame drawn, or a file
+# system call that renames, syncs or removes). A fresh process has no other thread that a fork
+# could catch holding a lock. The first child is not killed and counts the steps; then 20 kills
+# spread over them, each into a fresh copy of OLD; each folder left is copied to RESULTS/EVENT.
+_KILLER = """
+import json, os, shutil, signal, sys
+from pathlib import Path
 
+import numpy as np
+import pandas  # noqa: F401  (imported once here, not in every child)
+import seedtrack.commands.run  # noqa: F401
+import seedtrack.pipeline as pipeline
+from seedtrack.cli import main
+
+args, old, out, results = json.loads(sys.argv[1])
+results = Path(results)
+
+
+def killed_at(event):
+    shutil.rmtree(out, ignore_errors=True)
+    shutil.copytree(old, out)
     pid = os.fork()
     if pid:
-        return os.waitpid(pid, 0)[1]
+        status = os.waitpid(pid, 0)[1]
+        shutil.copytree(out, results / str(event))
+        (results / f"{event}.status").write_text(str(status))
+        return
     try:
-        import seedtrack.pipeline as pipeline
-
         taken = [0]
 
         def counted(function):
@@ -479,52 +494,57 @@ def _run_killed_at(event: int, args: list[str], count_file: Path) -> int:
         os.dup2(null, 1)
         os.dup2(null, 2)
         status = main(args)
-        count_file.write_text(str(taken[0]))
+        (results / "steps").write_text(str(taken[0]))
         os._exit(status)
     finally:
         os._exit(99)
 
 
+killed_at(0)
+steps = int((results / "steps").read_text())
+for event in sorted(set(np.linspace(1, steps, 20).round().astype(int).tolist())):
+    killed_at(event)
+"""
+
+
 def test_kill_9_at_20_points_through_run_leaves_the_old_set_or_the_new_one_whole(clip, other_clip, tmp_path, capsys):
+    import json
     import os
-    import shutil
 
     from seedtrack.data.errors import DataWarning
     from seedtrack.data.outputset import JOURNAL
 
-    old_folder, new_folder, out = tmp_path / "old", tmp_path / "new", tmp_path / "out"
+    old_folder, out, results = tmp_path / "old", tmp_path / "out", tmp_path / "results"
+    results.mkdir()
     args = ["run", str(clip / "clip.mp4"), "--out", str(out), "--workers", "1"]
     assert run(capsys, "run", other_clip / "clip.mp4", "--out", old_folder, "--workers", "1")[0] == 0
-    shutil.copytree(old_folder, out)
-    counts = tmp_path / "steps.txt"
-    assert _run_killed_at(10**9, args, counts) == 0
-    new = _visible(out)
-    shutil.copytree(out, new_folder)
+    subprocess.run([sys.executable, "-c", _KILLER, json.dumps([args, str(old_folder), str(out), str(results)])], check=True, timeout=300)
+    assert (results / "0.status").read_text() == "0"
+    new = _visible(results / "0")
     old = _visible(old_folder)
     assert set(new) == set(old) == set(RUN_SET) and all(new[name] != old[name] for name in RUN_SET)
-    steps = int(counts.read_text())
-    points = sorted(set(np.linspace(1, steps, 20).round().astype(int)))
-    assert len(points) == 20
+    steps = int((results / "steps").read_text())
+    points = sorted(int(path.stem) for path in results.glob("*.status") if path.stem != "0")
+    assert len(points) == 20 and points[-1] == steps
     seen = {"old": 0, "new": 0, "finished by the next reader": 0}
     for event in points:
-        shutil.rmtree(out)
-        shutil.copytree(old_folder, out)
-        status = _run_killed_at(event, args, counts)
-        assert os.WIFSIGNALED(status), event
-        if (out / JOURNAL).exists():
+        assert os.WIFSIGNALED(int((results / f"{event}.status").read_text())), event
+        left = results / str(event)
+        if (left / JOURNAL).exists():
             # The next reader of a file of the set finishes putting it in place, and says so.
             with pytest.warns(DataWarning, match="finished putting in place the files of a run that was stopped part-way"):
-                assert read_tracks(out / "tracks.csv").n_tracks == read_tracks(new_folder / "tracks.csv").n_tracks
-            assert _visible(out) == new, event
+                assert read_tracks(left / "tracks.csv").n_tracks == read_tracks(results / "0" / "tracks.csv").n_tracks
+            assert _visible(left) == new, event
             seen["finished by the next reader"] += 1
         else:
-            now = _visible(out)
+            now = _visible(left)
             assert now in (old, new), f"killed at step {event} of {steps}: a mix of two runs"
             seen["old" if now == old else "new"] += 1
     # The kills span the run: some before its set was committed, some after.
     assert seen["old"] >= 10 and seen["new"] + seen["finished by the next reader"] >= 2, seen
-    # A new run into a folder where one was killed cleans up the killed run's temporaries.
-    assert run(capsys, *args)[0] == 0 and _snapshot(out) == new
+    # A new run into a folder where one was killed leaves no temporary of the killed run behind.
+    assert run(capsys, *[a if a != str(out) else str(results / str(points[0])) for a in args])[0] == 0
+    assert _snapshot(results / str(points[0])) == new
 
 
 # --- 3. annotate: every edit checked as the readers check it ------------------------------------
