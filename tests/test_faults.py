@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from seedtrack.cli import main
 from seedtrack.data.csvio import read_table, write_table
@@ -920,3 +922,48 @@ def test_a_hostile_user(clip, tmp_path, capsys, monkeypatch, case):
     assert len(lines) == 1 and ("error:" in lines[0] or expected == "interrupted"), err
     assert lines[0].isprintable() and expected in lines[0], lines[0]
     assert after == before
+
+
+# Edits a hostile page could send: well-formed ones with numbers at and past every bound, and
+# bodies of any JSON type.
+_FRAMES = st.one_of(st.sampled_from([-1, 0, 7, 8, 99999, 2**70]), st.integers(0, 7))
+_COORDINATES = st.one_of(st.sampled_from([-0.5, -0.6, 319.5, 320, 239.5, 240, 1e308, -1e308, 1e6 + 1]), st.floats(-50, 400))
+_IDS = st.one_of(st.integers(0, 10), st.just(2**70))
+_JUNK = st.one_of(st.none(), st.text(max_size=3), st.booleans(), st.floats(allow_nan=True, allow_infinity=True), st.integers())
+_EDIT = st.one_of(
+    st.tuples(st.just("/api/click"), st.fixed_dictionaries({"frame": _FRAMES, "x": _COORDINATES, "y": _COORDINATES}, optional={"selected": _IDS, "reassign": st.booleans()})),
+    st.tuples(st.sampled_from(["/api/split", "/api/delete"]), st.fixed_dictionaries({"track": _IDS}, optional={"frame": _FRAMES})),
+    st.tuples(st.sampled_from(["/api/undo", "/api/redo"]), st.just({})),
+    st.tuples(st.sampled_from(["/api/click", "/api/split", "/api/delete"]), st.dictionaries(st.sampled_from(["frame", "x", "y", "track", "selected"]), _JUNK, max_size=5)),
+)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(edits=st.lists(_EDIT, max_size=12))
+def test_whatever_the_page_sends_the_session_files_are_read_back(clip, tmp_path_factory, edits):
+    from seedtrack.annotate.frames import FrameCache
+    from seedtrack.annotate.server import _ACTIONS, AnnotateServer
+    from seedtrack.annotate.session import EditRefused, Session
+    from seedtrack.commands.render import check_fits
+    from seedtrack.data.corrections import apply_corrections, read_corrections
+    from seedtrack.data.frames import open_frames
+
+    out = tmp_path_factory.mktemp("session")
+    start = read_tracks(clip / "truth.csv")
+    server = AnnotateServer(Session(start, out, clip / "truth.csv"), FrameCache(clip / "clip.mp4"))
+    try:
+        for path, body in edits:
+            try:
+                _ACTIONS[path](server, body)
+            except (EditRefused, ValueError, TypeError, KeyError):
+                pass  # the server answers 400 or 409 to these
+    finally:
+        server.server_close()
+        server.frames.close()
+    # What the session wrote, `correct` and `render` read back.
+    rebuilt = apply_corrections(start, read_corrections(out / "corrections.txt"), out / "corrections.txt")
+    saved = read_tracks(out / "tracks.csv")
+    np.testing.assert_allclose(rebuilt.to_rows()["x"], saved.to_rows()["x"], atol=1e-4)
+    rows = saved.to_rows()
+    with open_frames(clip / "clip.mp4") as source:
+        check_fits(out / "tracks.csv", rows["frame"], rows["x"], rows["y"], source, clip / "clip.mp4")
