@@ -304,18 +304,20 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
     inputs = [clip, *([detection.roi] if isinstance(detection.roi, Path) else [])]
     refuse_replacing_inputs(inputs, [Path(out) / name for name in (*RUN_FILES, MANIFEST)])
     with output_set(out, "seedtrack run", inputs) as files:
+        # Named now: a folder in a file's place is found before the clip is read, not after.
+        paths = {name: files.path(name) for name in RUN_FILES}
         # pandas, which writes the tables (a third of run's imports), loads in a thread beside
         # detection, whose threads leave part of a core free, rather than alone on one core.
         threading.Thread(target=importlib.import_module, args=("pandas",), daemon=True).start()
         found = detect_clip(clip, detection, workers=workers)
         detections = found.detections
         rows = detections.to_rows()
-        write_table(files.path("detections.csv"), rows)
+        write_table(paths["detections.csv"], rows)
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
-        with VideoEncoder(files.path("overlay.mp4"), found.fps, workers) as encoder:
+        with VideoEncoder(paths["overlay.mp4"], found.fps, workers) as encoder:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
-            write_tracks(files.path("tracks.csv"), tracks, detections.frame_indices)
+            write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks
