@@ -11,6 +11,7 @@ ValueError) naming it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import dataclass, field
@@ -21,14 +22,14 @@ from seedtrack.data.trackfile import FORMATS
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.linking import GOA_FAMILY
-from seedtrack.tracking.motion import CombinedModel, IndividualModel
+from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, CombinedModel, IndividualModel
 from seedtrack.tracking.regime import MOTIONS
 from seedtrack.tracking.trackers import TRACKERS
 
 from .errors import OptionError
 from .points import TrackingSettings
 
-__all__ = ["OptionError", "LinkSettings", "EvaluateSettings", "RenderSettings", "FIRST_LINKS", "check_tolerance"]
+__all__ = ["OptionError", "LinkSettings", "INDIVIDUAL_CHOICES", "COMBINED_CHOICES", "EvaluateSettings", "RenderSettings", "FIRST_LINKS", "check_tolerance"]
 
 
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
@@ -46,6 +47,21 @@ _LARGEST = {
     "min_speed": (MAX_COORDINATE_PX, "no point moves farther than the largest coordinate read"),
 }
 _DEFAULT_PHI_MAX = GOAConfig().phi_max
+
+
+def _by_name(registry: dict[str, type]) -> tuple[str, ...]:
+    """The registered models that a name alone builds (the persistent model needs the
+    statistics a first pass measures)."""
+    return tuple(
+        name
+        for name, model in registry.items()
+        if all(f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING for f in dataclasses.fields(model))
+    )
+
+
+# What --individual-model and --combined-model choose from.
+INDIVIDUAL_CHOICES = _by_name(INDIVIDUAL_MODELS)
+COMBINED_CHOICES = _by_name(COMBINED_MODELS)
 
 
 @dataclass(frozen=True)
@@ -143,11 +159,9 @@ class LinkSettings:
                 raise OptionError(f"{name} must be a whole number of frames >= 0, got {value}", name)
         if self.fixed_count and self.max_gap is not None:
             raise OptionError("max_gap does not apply with fixed_count (no track ends)", "max_gap", "fixed_count")
-        for name, kind in (("individual_model", IndividualModel), ("combined_model", CombinedModel)):
-            try:
-                kind(getattr(self, name) or kind._default)
-            except ValueError as error:
-                raise OptionError(f"{name}: {error}", name) from None
+        for name, choices in (("individual_model", INDIVIDUAL_CHOICES), ("combined_model", COMBINED_CHOICES)):
+            if getattr(self, name) not in (None, *choices):
+                raise OptionError(f"{name} must be one of {', '.join(choices)}, got {getattr(self, name)!r}", name)
 
     @property
     def first_links_file(self) -> Path | None:

@@ -8,13 +8,12 @@ from pathlib import Path
 from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_points as read_points_table
 from seedtrack.data.trackfile import output_format, write_rows
-from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS
 from seedtrack.tracking.trackers import TRACKERS
 
 from ..allocation import return_freed_memory
 from ..errors import output_file
 from ..points import Points, group_points, link_points, track_rows
-from ..settings import LinkSettings
+from ..settings import COMBINED_CHOICES, INDIVIDUAL_CHOICES, LinkSettings
 from ..wording import counted
 from . import settings_of
 from .tracker_options import add_tracker_options
@@ -84,13 +83,13 @@ def add_parser(subparsers) -> None:
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
-        choices=tuple(INDIVIDUAL_MODELS),
+        choices=INDIVIDUAL_CHOICES,
         default=None,
         help="cost of one link: im1 nearest neighbour, im2 smooth motion (default), im3 proximal uniformity",
     )
     group.add_argument(
         "--combined-model",
-        choices=tuple(COMBINED_MODELS),
+        choices=COMBINED_CHOICES,
         default=None,
         help="how link costs add up in a frame: cm1 sum (default), cm2 conditioned on competitors",
     )
