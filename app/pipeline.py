@@ -449,10 +449,13 @@ def _annotate_pair(frame: tuple[int, np.ndarray], span: tuple[float, float], **o
     return annotate(to_bgr8(image, span), index, **options)
 
 
-def run_pipeline(clip: Path, out: Path, detection: DetectSettings = DetectSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
+def run_pipeline(
+    clip: Path, out: Path, detection: DetectSettings = DetectSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1, verbose: bool = False
+) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
+    Detection is :func:`detect_clip`, tracking :func:`track_frames` (``verbose``: the motion in
+    detail). Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking; the files are the same for any number.
 
@@ -471,7 +474,7 @@ def run_pipeline(clip: Path, out: Path, detection: DetectSettings = DetectSettin
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
         with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
-            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
+            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
             write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks

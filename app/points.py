@@ -21,6 +21,7 @@ from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import Tracks
 
 from .progress import progress_bar
+from .wording import motion_lines
 
 if TYPE_CHECKING:
     from .settings import LinkSettings
@@ -199,20 +200,24 @@ class TrackingSettings:
 
 
 def track_frames(
-    frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] | None = print
+    frames: list[np.ndarray],
+    settings: TrackingSettings = TrackingSettings(),
+    first_frame: int = 0,
+    say: Callable[[str], None] | None = print,
+    verbose: bool = False,
 ) -> Tracks:
     """Track points as ``settings`` say, with a progress bar, and drop the short tracks.
 
     The GOA family says on one ``motion: ...`` line how the points move
-    (:attr:`seedtrack.tracking.linking.MotionFit.summary`) to ``say`` (None: to nobody).
-    ``first_frame`` is the 0-based index of ``frames[0]``.
+    (:func:`seedtrack.wording.motion_lines`; with ``verbose``, the details on more lines) to
+    ``say`` (None: to nobody). ``first_frame`` is the 0-based index of ``frames[0]``.
 
     Examples
     --------
     >>> import numpy as np
     >>> frames = [np.array([[10.0 + 2 * k, 10.0], [40.0 - 2 * k, 30.0]]) for k in range(6)]
     >>> track_frames(frames, TrackingSettings(min_length=3)).n_tracks  # doctest: +ELLIPSIS
-    motion: smooth-motion default: only 8 unambiguous 3-frame chains (need 30) ...
+    motion: smooth-motion default, tracked with IM2, no speed limit
     2
     """
     if settings.algorithm not in GOA_FAMILY:
@@ -231,13 +236,15 @@ def track_frames(
             first_links=settings.first_links,
         )
     if say is not None:
-        say(fit.summary)
+        for line in motion_lines(fit, verbose):
+            say(line)
     return drop_short(tracks, settings.min_length)
 
 
-def link_points(points: Points, settings: LinkSettings, say: Callable[[str], None] | None = print) -> Tracks:
-    """Link grouped points as ``settings`` say (:func:`track_frames`), the first links of a tracks
-    file read first (:func:`given_first_links`).
+def link_points(points: Points, settings: LinkSettings, say: Callable[[str], None] | None = print, verbose: bool = False) -> Tracks:
+    """Link grouped points as ``settings`` say (:func:`track_frames`, which says how they move to
+    ``say``, in detail with ``verbose``), the first links of a tracks file read first
+    (:func:`given_first_links`).
 
     Examples
     --------
@@ -249,7 +256,7 @@ def link_points(points: Points, settings: LinkSettings, say: Callable[[str], Non
     tracking = settings.tracking()
     if settings.first_links_file is not None:
         tracking = replace(tracking, first_links=given_first_links(settings.first_links_file, points))
-    return track_frames(points.frames, tracking, points.first_frame, say)
+    return track_frames(points.frames, tracking, points.first_frame, say, verbose)
 
 
 # A given first link's point must lie this close to a measured point, pixels.

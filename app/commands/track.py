@@ -16,7 +16,7 @@ from ..points import Points, group_points, link_points, track_rows
 from ..settings import COMBINED_CHOICES, INDIVIDUAL_CHOICES, LinkSettings
 from ..wording import counted
 from . import settings_of
-from .tracker_options import add_tracker_options
+from .tracker_options import add_tracker_options, add_verbose_option
 
 DESCRIPTION = """\
 Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any other columns are
@@ -80,6 +80,7 @@ def add_parser(subparsers) -> None:
         help="tracker (default goa-updown)",
     )
     add_tracker_options(parser)
+    add_verbose_option(parser)
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
@@ -121,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     check_target(args.out)
     output_format(args.out)
     points = read_points(args.points)
-    tracks = link_points(points, settings)
+    tracks = link_points(points, settings, verbose=args.verbose)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
     counts = f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, {counted(tracks.n_tracks, 'track')}"
     rows = track_rows(points, tracks)

@@ -67,6 +67,15 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_verbose_option(parser: argparse.ArgumentParser) -> None:
+    """``--verbose``: how the points move in detail, below the one ``motion:`` line."""
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="below the motion: line, what the first look at the motion found and all that a first pass measured",
+    )
+
+
 def tracking_settings(args: argparse.Namespace) -> TrackingSettings:
     """The tracking the options ask for (:meth:`seedtrack.settings.LinkSettings.tracking`; an
     OptionError names an option that makes no sense)."""
