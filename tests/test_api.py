@@ -255,7 +255,7 @@ def test_import_seedtrack_loads_nothing_until_used():
         seedtrack.tracking.no_such_module
 
 
-@pytest.mark.parametrize("module", ["seedtrack.api", "seedtrack.points", "seedtrack.tracking.linking", "seedtrack.tracking.evaluation", "seedtrack.detection.clip"])
+@pytest.mark.parametrize("module", ["seedtrack.api", "seedtrack.settings", "seedtrack.wording", "seedtrack.errors", "seedtrack.pipeline", "seedtrack.points", "seedtrack.tracking.linking", "seedtrack.tracking.evaluation", "seedtrack.detection.clip"])
 def test_docstring_examples_run(module):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
