@@ -38,11 +38,13 @@ def markdown_table(header: list[str], rows: list[list[object]]) -> str:
 
 
 def commit() -> str:
-    """The checkout's short commit, with ``+changes`` when its tracked files differ from it."""
+    """The checkout's short commit, with ``+changes`` when its tracked files other than the docs
+    differ from it (tables written by an earlier script change the docs, not what is measured)."""
     def git(*args: str) -> str:
         return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True, check=True).stdout.strip()
     try:
-        return git("rev-parse", "--short", "HEAD") + ("+changes" if git("status", "--porcelain", "--untracked-files=no") else "")
+        changed = git("status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs", ":!*.md")
+        return git("rev-parse", "--short", "HEAD") + ("+changes" if changed else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown commit"
 
