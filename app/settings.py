@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from seedtrack.data.numbers import MAX_COORDINATE_PX
@@ -246,24 +246,10 @@ _MIN_FPS = 0.01
 
 @dataclass(frozen=True)
 class RenderSettings:
-    """Which frames are drawn and how: the options ``seedtrack render`` and ``compare`` share.
-
-    Attributes
-    ----------
-    start, end, step : int
-        0-based frames drawn: ``range(start, end, step)``, end None for the clip's end.
-    frame : int or None
-        The frame a .png output shows; None: the tracks' last.
-    trail : int
-        Past positions in each fading trail.
-    labels : bool
-        Write each track's id beside it.
-    scale : float
-        Enlarge (or shrink, below 1) the frames.
-    crop : str or None
-        "x0,y0,x1,y1": draw only this box of the input frame, pixels (x1, y1 exclusive).
-    fps : float or None
-        Frames per second of the output; None: the clip's.
+    """Which frames are drawn and how: the options ``seedtrack render`` and ``compare`` share,
+    as :func:`seedtrack.render` takes them (``start``, ``end``, ``step``, ``frame``: 0-based
+    frames; ``trail``: positions; ``crop``: "x0,y0,x1,y1" in pixels; ``fps``: None for the
+    clip's).
 
     Examples
     --------
