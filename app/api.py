@@ -334,7 +334,7 @@ def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) ->
     roi = settings.roi
     if isinstance(roi, Path):
         roi = read_mask(roi, (first[1].shape[1], first[1].shape[0]))
-    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter, settings.min_mass))
+    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter, settings.min_mass, settings.snr))
 
 
 def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer: tuple[str, ...]) -> dict[str, np.ndarray]:

@@ -76,6 +76,9 @@ class DetectionSettings:
     min_mass : float or None
         The spot detector's least mass (integrated brightness, data units times pixels, as the
         ``detector:`` line prints it); None sets it from the first frame's noise.
+    snr : float or None
+        The spot detector's signal-to-background ratio: the least mass is this many times the
+        typical mass of the background's own maxima; None decides from the first frame.
     """
 
     options: BlobOptions = BlobOptions()
@@ -86,6 +89,7 @@ class DetectionSettings:
     end: int | None = None
     step: int = 1
     min_mass: float | None = None
+    snr: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,7 +161,7 @@ def detect_clip(
             span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
         background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass)
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass, settings.snr)
         preview = None
 
         def decoded():
@@ -190,6 +194,8 @@ def detect_clip(
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
             say(f"detector: {detector.choice.reason}{_unused_options(settings, detector.choice)}")
+        if detector.choice.spots is not None and detector.choice.spots.unusual:
+            warn(str(path), detector.choice.spots.unusual)
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(detections.frame_indices.size, 'frame')} before it", file=sys.stderr)
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
@@ -205,7 +211,8 @@ def _unused_options(settings: DetectionSettings, choice: DetectorChoice) -> str:
     not run, so that they are never ignored silently ("" when there are none)."""
     defaults = BlobOptions()
     if choice.spots is None:
-        return "; --min-mass applies to the spot detector only (not used)" if settings.min_mass is not None else ""
+        given = [option for option, value in (("--min-mass", settings.min_mass), ("--snr", settings.snr)) if value is not None]
+        return f"; {', '.join(given)} {'apply' if len(given) > 1 else 'applies'} to the spot detector only (not used)" if given else ""
     given = settings.options
     unused = [
         option

@@ -64,6 +64,16 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
         "set from the noise measured on the first frame)",
     )
     group.add_argument(
+        "--snr",
+        type=float,
+        default=None,
+        metavar="R",
+        help="spot detector: signal-to-background ratio, the least mass as a multiple of the typical mass of the "
+        "background's own maxima (blur, compression blocks, uneven light); higher finds fewer, surer spots; "
+        "the detector line and --preview print the ratio and count in use (default: where the first frame's "
+        "masses show objects apart from background, else from the noise; --min-mass wins)",
+    )
+    group.add_argument(
         "--polarity",
         choices=POLARITIES,
         default=defaults.polarity,
@@ -132,6 +142,8 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
         raise UsageError(f"--diameter must be an odd number of pixels >= 3, got {args.diameter}")
     if args.min_mass is not None and not (np.isfinite(args.min_mass) and args.min_mass >= 0):
         raise UsageError(f"--min-mass must be a finite number >= 0, got {args.min_mass:g}")
+    if args.snr is not None and not (np.isfinite(args.snr) and args.snr > 0):
+        raise UsageError(f"--snr must be a finite number > 0, got {args.snr:g}")
     try:
         options = BlobOptions(
             polarity=args.polarity,
@@ -150,7 +162,7 @@ def detection_settings(args: argparse.Namespace) -> DetectionSettings:
             raise UsageError(f"--{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}")
     if args.end is not None and args.end <= args.start:
         raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
-    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step, args.min_mass)
+    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step, args.min_mass, args.snr)
 
 
 def _roi(text: str) -> str | Circle | Path:
