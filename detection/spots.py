@@ -597,14 +597,15 @@ def fit_spot_settings(
     # the spots apart from the noise, the least mass is never below the valley between them.
     settings = replace(settings, min_mass=max(settings.min_mass, _valley(candidates, _VALLEY_REACH * mass / median)))
     background = background_of(candidates, median * strongest)
-    unusual = ""
-    if background.structured and not background.valley:
-        unusual = (
-            f"the background's own maxima (typical mass {background.mass:.3g}, {background.mass / (median * strongest):.0f} times"
-            " white noise's) are not apart from the objects' masses: spots may be background; raise --snr if so"
-        )
     least = max(settings.min_mass, background.valley if background.structured else 0.0) if snr is None else snr * background.mass
     settings = replace(settings, min_mass=float(least), background_mass=background.mass)
+    unusual = ""
+    if background.structured and not background.valley and snr is None:
+        unusual = (
+            f"the background's own maxima (typical mass {background.mass:.3g}, {background.mass / (median * strongest):.0f} times white"
+            f" noise's) show no valley below heavier objects, and the least mass is snr {least / background.mass:.2g} of them:"
+            " spots may be background; raise --snr if so"
+        )
     covered = np.count_nonzero(candidates > settings.min_mass) * len(_disc(settings.diameter // 2)[0]) / max(pixels, 1)
     if covered > _CROWDED_SHARE and not unusual:
         unusual = f"spots would cover {covered:.0%} of the frame, more than spots do: background may be taken for spots; raise --snr if so"

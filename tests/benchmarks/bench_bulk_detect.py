@@ -91,6 +91,25 @@ def against_truth(points: list[np.ndarray], truth: pd.DataFrame, frames: tuple[i
     return matched_found / max(kept_found, 1), matched_true / max(kept_true, 1), kept_found, kept_true
 
 
+def trackpy_misses(theirs: list[np.ndarray], truth: pd.DataFrame) -> str:
+    """Why trackpy's features and the marks differ: marked beads it misses that lie within its
+    separation (12 px, diameter + 1) of one of its features, and its features that match no mark."""
+    missed = near = unmarked = features = 0
+    for (index, crop), marked in truth.groupby(["frame", "crop"]):
+        x0, y0 = CROPS[crop]
+        true = marked[["x", "y"]].to_numpy()
+        mine = theirs[index]
+        inside = (mine[:, 0] >= x0 + EDGE_PX) & (mine[:, 0] <= x0 + SIDE - 1 - EDGE_PX) & (mine[:, 1] >= y0 + EDGE_PX) & (mine[:, 1] <= y0 + SIDE - 1 - EDGE_PX)
+        rows, columns = match_frame(mine, true, TRUTH_PX)
+        lost = np.setdiff1d(np.arange(len(true)), columns)
+        missed += lost.size
+        if lost.size and len(mine):
+            near += int(np.sum(cKDTree(mine).query(true[lost])[0] <= 12))
+        features += int(inside.sum())
+        unmarked += int(inside.sum() - inside[rows].sum())
+    return f"  trackpy misses {missed} marked beads, {near} of them within its separation (12 px) of one of its features; {unmarked} of its {features} features in the crops match no mark"
+
+
 def truth_line(name: str, points: list[np.ndarray], truth: pd.DataFrame) -> str:
     reporting = tuple(sorted(set(truth["frame"]) - set(TUNING_FRAMES)))
     parts = []
@@ -120,6 +139,7 @@ def main() -> None:
     for name, points in results:
         print(truth_line(name, points, truth))
     print(truth_line("trackpy (walkthrough)", theirs, truth))
+    print(trackpy_misses(theirs, truth))
 
 
 if __name__ == "__main__":
