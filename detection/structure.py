@@ -26,7 +26,8 @@ _SMOOTH_DECADES = 0.08
 # A mode is a local maximum of the density at least this share of the highest.
 _MODE_SHARE = 0.25
 # The background is structured when its mode lies this many times above the median mass of white
-# noise's maxima at the measured level (1.0 to 1.3 on generated noise, about 8 on bulk water).
+# noise's maxima at the measured level (0.8 to 1.05 on the frames of bench_detect_spots.py, about 8 on
+# bulk water).
 _STRUCTURED = 3.0
 # There is a valley between two modes when the density somewhere between them falls to this share
 # of the lower of the two (bulk water: 0.6 to 0.75, frame by frame).

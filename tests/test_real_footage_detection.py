@@ -74,6 +74,8 @@ def test_snr_sets_the_least_mass_as_a_multiple_of_the_background_maxima():
         assert f"snr {snr:.3g} x background maxima" in describe(settings)
         counts.append(len(detect_spots(image, settings)["x"]))
     assert counts[0] > counts[1] > counts[2]
+    # A ratio that takes the background for spots covers the frame with them, and is said.
+    assert "spots would cover" in fit_spot_settings(image, "dark", snr=0.2).unusual
 
 
 def test_structured_background_without_objects_is_said():

@@ -15,7 +15,8 @@ Run as ``python tests/benchmarks/bench_bulk_detect.py [--snr X ...]``. On every 
   marked after it was fixed and are reported apart.
 
 With ``--snr`` the same figures for the signal-to-background ratios given (the spot detector's
-knob), to show what it does.
+knob), to show what it does. With ``--write-docs`` the table is also written into
+``docs/detection-rule.md``, between its ``bench_bulk_detect`` markers.
 """
 
 from __future__ import annotations
@@ -55,7 +56,9 @@ def seedtrack_points(frames: list[np.ndarray], **options) -> tuple[list[np.ndarr
     return points, detector.choice.reason
 
 
-def against_trackpy(ours: list[np.ndarray], theirs: list[np.ndarray]) -> str:
+def against_trackpy(ours: list[np.ndarray], theirs: list[np.ndarray]) -> tuple[float, float, float, float, float, float]:
+    """Detections a frame; their median, least and most ratio to trackpy's over frames; the share
+    of ours near one of its features; the share of its features found."""
     ratios, near, found = [], 0, 0
     for mine, reference in zip(ours, theirs):
         ratios.append(len(mine) / max(len(reference), 1))
@@ -63,10 +66,7 @@ def against_trackpy(ours: list[np.ndarray], theirs: list[np.ndarray]) -> str:
             near += int(np.sum(cKDTree(reference).query(mine)[0] <= NEAR_PX))
             found += int(np.sum(cKDTree(mine).query(reference)[0] <= NEAR_PX))
     total_ours, total_theirs = sum(map(len, ours)), sum(map(len, theirs))
-    return (
-        f"{total_ours / len(ours):.0f} a frame, {np.median(ratios):.2f}x trackpy's (frames {min(ratios):.2f}-{max(ratios):.2f}); "
-        f"ours near one of its features {near / total_ours:.3f}; its features found {found / total_theirs:.3f}"
-    )
+    return total_ours / len(ours), float(np.median(ratios)), min(ratios), max(ratios), near / total_ours, found / total_theirs
 
 
 def against_truth(points: list[np.ndarray], truth: pd.DataFrame, frames: tuple[int, ...]) -> tuple[float, float, int, int]:
@@ -110,36 +110,51 @@ def trackpy_misses(theirs: list[np.ndarray], truth: pd.DataFrame) -> str:
     return f"  trackpy misses {missed} marked beads, {near} of them within its separation (12 px) of one of its features; {unmarked} of its {features} features in the crops match no mark"
 
 
-def truth_line(name: str, points: list[np.ndarray], truth: pd.DataFrame) -> str:
-    reporting = tuple(sorted(set(truth["frame"]) - set(TUNING_FRAMES)))
-    parts = []
-    for label, frames in (("reporting", reporting), ("tuning", TUNING_FRAMES)):
-        precision, recall, found, true = against_truth(points, truth, frames)
-        parts.append(f"{label} precision {precision:.3f} recall {recall:.3f} ({found} found, {true} marked)")
-    return f"  {name:<28} " + "; ".join(parts)
+MARKERS = ("<!-- bench_bulk_detect: begin -->", "<!-- bench_bulk_detect: end -->")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--snr", type=float, nargs="*", default=[], help="also these signal-to-background ratios")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/detection-rule.md")
     args = parser.parse_args()
     frames = grey_frames()
     truth = pd.read_csv(TRUTH_DIR / "truth.csv")
+    reporting = tuple(sorted(set(truth["frame"]) - set(TUNING_FRAMES)))
     theirs = trackpy_features(frames)
     print(f"bulk water, {len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}; trackpy (walkthrough) {sum(map(len, theirs)) / len(frames):.0f} features a frame")
-    rows = [("seedtrack defaults", {}), ("seedtrack --detector blob", {"detector": "blob"})]
-    rows += [(f"seedtrack --snr {snr:g}", {"snr": snr}) for snr in args.snr]
-    results = []
-    for name, options in rows:
+    runs = [("seedtrack, defaults", {}), ("seedtrack, `--detector blob`", {"detector": "blob"})]
+    runs += [(f"seedtrack, `--snr {snr:g}`", {"snr": snr}) for snr in args.snr]
+    table = [
+        "| detector | a frame | x trackpy's (range over frames) | ours near its features | its features found | precision / recall, reporting | tuning |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+
+    def row(name: str, points: list[np.ndarray], versus: tuple | None) -> str:
+        cells = [name, f"{sum(map(len, points)) / len(points):.0f}"]
+        if versus is None:
+            cells += ["1", "-", "-"]
+        else:
+            per_frame, ratio, low, high, near, found = versus
+            cells += [f"{ratio:.2f} ({low:.2f}-{high:.2f})", f"{near:.3f}", f"{found:.3f}"]
+        for frames_set in (reporting, TUNING_FRAMES):
+            precision, recall, _, _ = against_truth(points, truth, frames_set)
+            cells.append(f"{precision:.3f} / {recall:.3f}")
+        return "| " + " | ".join(cells) + " |"
+
+    for name, options in runs:
         points, reason = seedtrack_points(frames, **options)
         print(f"{name}: {reason}")
-        print(f"  against trackpy: {against_trackpy(points, theirs)}")
-        results.append((name, points))
-    print(f"against the marked beads ({len(truth)} marks, one-to-one within {TRUTH_PX:g} px):")
-    for name, points in results:
-        print(truth_line(name, points, truth))
-    print(truth_line("trackpy (walkthrough)", theirs, truth))
+        table.append(row(name, points, against_trackpy(points, theirs)))
+    table.append(row("trackpy, walkthrough settings", theirs, None))
+    print(f"against trackpy (within {NEAR_PX:g} px) and the {len(truth)} marked beads (one-to-one within {TRUTH_PX:g} px; reporting frames {', '.join(map(str, reporting))}):")
+    print("\n".join(table))
     print(trackpy_misses(theirs, truth))
+    if args.write_docs:
+        page = Path(__file__).resolve().parents[2] / "docs" / "detection-rule.md"
+        text = page.read_text()
+        begin, end = text.index(MARKERS[0]) + len(MARKERS[0]), text.index(MARKERS[1])
+        page.write_text(text[:begin] + "\n" + "\n".join(table) + "\n\n" + trackpy_misses(theirs, truth).strip() + ".\n" + text[end:])
 
 
 if __name__ == "__main__":
