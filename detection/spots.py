@@ -566,8 +566,8 @@ def fit_spot_settings(
     light), whose maxima white noise does not describe. Where the candidates' masses show the
     background's maxima as a mode at least 3 times heavier than white noise's median, and the
     objects as a second mode above a dip in the density of log mass, the least mass is no lower
-    than halfway between the two modes on a log scale
-    (:func:`seedtrack.detection.structure.background_of`). ``snr`` (the signal-to-background
+    than where a candidate becomes more likely an object than background (two normal components
+    fitted to the log masses; :func:`seedtrack.detection.structure.background_of`). ``snr`` (the signal-to-background
     ratio), when given, sets the least mass to ``snr`` times the background's typical maximum
     instead.
 
@@ -604,11 +604,11 @@ def fit_spot_settings(
         unusual = (
             f"the background's own maxima (typical mass {background.mass:.3g}, {background.mass / (median * strongest):.0f} times white"
             f" noise's) show no valley below heavier objects, and the least mass is snr {least / background.mass:.2g} of them:"
-            " spots may be background; raise --snr if so"
+            " spots may be background; raise the signal-to-background ratio (--snr) if so"
         )
     covered = np.count_nonzero(candidates > settings.min_mass) * len(_disc(settings.diameter // 2)[0]) / max(pixels, 1)
     if covered > _CROWDED_SHARE and not unusual:
-        unusual = f"spots would cover {covered:.0%} of the frame, more than spots do: background may be taken for spots; raise --snr if so"
+        unusual = f"spots would cover {covered:.0%} of the frame, more than spots do: background may be taken for spots; raise the signal-to-background ratio (--snr) if so"
     return replace(settings, unusual=unusual)
 
 

@@ -81,7 +81,7 @@ def test_snr_sets_the_least_mass_as_a_multiple_of_the_background_maxima():
 def test_structured_background_without_objects_is_said():
     image, _ = structured_scene(5, beads=0)
     unusual = fit_spot_settings(image, "dark").unusual
-    assert "show no valley" in unusual and "raise --snr" in unusual
+    assert "show no valley" in unusual and "raise the signal-to-background ratio (--snr)" in unusual
 
 
 def test_snr_option_is_taken_checked_and_said(tmp_path, capsys):
