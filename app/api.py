@@ -66,7 +66,9 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
         (1% of the frame), ``roi`` ("auto", "none", (x, y, r) in pixels, or a mask image file),
         ``split`` (True), ``start`` (0), ``end`` (None: the end), ``step`` (1), ``diameter`` and
         ``min_mass`` (the spot detector's diameter, pixels, and least mass, integrated brightness
-        in grey levels times pixels; None: set from the first frame).
+        in grey levels times pixels; None: set from the first frame), ``snr`` (the spot
+        detector's least mass as a multiple of the background's typical maximum; None: decided
+        on the first frame).
 
     Returns
     -------
