@@ -52,6 +52,7 @@ def detect(
     detector: str = _DETECT.detector,
     diameter: int | None = _DETECT.diameter,
     min_mass: float | None = _DETECT.min_mass,
+    snr: float | None = _DETECT.snr,
     polarity: str = _DETECT.polarity,
     background: str = _DETECT.background,
     background_size: float = _DETECT.background_size,
@@ -82,6 +83,10 @@ def detect(
     min_mass : float, optional
         The spot detector's least mass, integrated brightness in grey levels times pixels
         (default: set from the first frame's noise).
+    snr : float, optional
+        The spot detector's least mass as a multiple of the typical mass of the background's own
+        maxima (default: where the first frame's masses show objects apart from the background,
+        else from the noise; ``min_mass`` wins).
     polarity : {"auto", "dark", "light"}
         Objects darker or lighter than the background ("auto": decided on the first frame).
     background : {"local", "none", "temporal"}

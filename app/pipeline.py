@@ -78,6 +78,9 @@ class DetectSettings:
     min_mass : float or None
         The spot detector's least mass (integrated brightness, grey levels times pixels); None
         sets it from the first frame's noise.
+    snr : float or None
+        The spot detector's signal-to-background ratio: the least mass is this many times the
+        typical mass of the background's own maxima; None decides from the first frame.
     polarity, background, background_size, threshold, split
         As :class:`seedtrack.detection.blobs.BlobOptions` takes them; ``threshold`` may also be
         the text of a number.
@@ -108,6 +111,7 @@ class DetectSettings:
     detector: str = "auto"
     diameter: int | None = None
     min_mass: float | None = None
+    snr: float | None = None
     polarity: str = _BLOB.polarity
     background: str = _BLOB.background
     background_size: float = _BLOB.background_size
@@ -136,6 +140,8 @@ class DetectSettings:
             raise OptionError(f"diameter must be an odd number of pixels >= 3, got {self.diameter}", "diameter")
         if self.min_mass is not None and not (math.isfinite(self.min_mass) and self.min_mass >= 0):
             raise OptionError(f"min_mass must be a finite number >= 0, got {self.min_mass:g}", "min_mass")
+        if self.snr is not None and not (math.isfinite(self.snr) and self.snr > 0):
+            raise OptionError(f"snr must be a finite number > 0, got {self.snr:g}", "snr")
         try:
             options = BlobOptions(
                 polarity=self.polarity,
@@ -267,7 +273,7 @@ def detect_clip(
         background = None
         if settings.options.background == "temporal":
             background = _temporal_background(path, settings, source) if on_file else source.background()
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass)
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass, settings.snr)
         preview = None
 
         def decoded():
@@ -300,6 +306,8 @@ def detect_clip(
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
             say(f"detector: {detector.choice.reason}{_unused_options(settings, detector.choice)}")
+        if detector.choice.spots is not None and detector.choice.spots.unusual:
+            warn(str(path), detector.choice.spots.unusual)
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(detections.frame_indices.size, 'frame')} before it", file=sys.stderr)
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
@@ -365,7 +373,8 @@ def _unused_options(settings: DetectSettings, choice: DetectorChoice) -> str:
     not run, so that they are never ignored silently ("" when there are none)."""
     defaults = BlobOptions()
     if choice.spots is None:
-        return "; --min-mass applies to the spot detector only (not used)" if settings.min_mass is not None else ""
+        given = [option for option, value in (("--min-mass", settings.min_mass), ("--snr", settings.snr)) if value is not None]
+        return f"; {', '.join(given)} {'apply' if len(given) > 1 else 'applies'} to the spot detector only (not used)" if given else ""
     given = settings.options
     unused = [
         option

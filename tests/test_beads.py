@@ -20,8 +20,10 @@ def quiet(line):
 def test_beads_get_the_spot_detector_at_trackpys_diameter():
     found = detect_clip(BEADS, DetectSettings(end=6), say=quiet)
     assert found.choice.name == "spot" and found.choice.spots.diameter == 11 and found.choice.spots.polarity == "dark"
+    # trackpy's walkthrough finds about 585 a frame here; a threshold that took the background's
+    # own maxima for beads found about 1,215 (tests/benchmarks/bench_bulk_detect.py).
     counts = found.detections.counts
-    assert 900 <= np.median(counts) <= 1300, counts
+    assert 0.75 * 585 <= np.median(counts) <= 1.33 * 585, counts
 
 
 @needs_beads

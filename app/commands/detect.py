@@ -61,6 +61,16 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
         "set from the noise measured on the first frame)",
     )
     group.add_argument(
+        "--snr",
+        type=float,
+        default=None,
+        metavar="R",
+        help="spot detector: signal-to-background ratio, the least mass as a multiple of the typical mass of the "
+        "background's own maxima (blur, compression blocks, uneven light); higher finds fewer, surer spots; "
+        "the detector line and --preview print the ratio and count in use (default: where the first frame's "
+        "masses show objects apart from background, else from the noise; --min-mass wins)",
+    )
+    group.add_argument(
         "--polarity",
         choices=POLARITIES,
         default=defaults.polarity,
