@@ -856,7 +856,7 @@ HOSTILE = {
     "disk full": (lambda w, c, m: m.setattr("pandas.DataFrame.to_csv", _no_space) or ["track", _points(w), "--out", w / "t.csv"], "No space left on device"),
     "points are a symlink loop": (lambda w, c, m: ["track", _loop(w / "loop.csv"), "--out", w / "t.csv"], "loop.csv"),
     "points are a pipe": (lambda w, c, m: ["track", _fifo(w / "pipe.csv"), "--out", w / "t.csv"], "not a regular file"),
-    "Ctrl-C while tracking": (lambda w, c, m: _interrupt(m, "seedtrack.commands.track.track_points") or ["track", _points(w), "--out", w / "t.csv"], "interrupted"),
+    "Ctrl-C while tracking": (lambda w, c, m: _interrupt(m, "seedtrack.commands.track.link_points") or ["track", _points(w), "--out", w / "t.csv"], "interrupted"),
     # render
     "--scale nan": (lambda w, c, m: _render(w, c, "--scale", "nan"), "--scale"),
     "--step 0": (lambda w, c, m: _render(w, c, "--step", "0"), "--step must be at least 1"),
@@ -944,7 +944,7 @@ def test_whatever_the_page_sends_the_session_files_are_read_back(clip, tmp_path_
     from seedtrack.annotate.frames import FrameCache
     from seedtrack.annotate.server import _ACTIONS, AnnotateServer
     from seedtrack.annotate.session import EditRefused, Session
-    from seedtrack.commands.render import check_fits
+    from seedtrack.rendering import check_fits
     from seedtrack.data.corrections import apply_corrections, read_corrections
     from seedtrack.data.frames import open_frames
 

@@ -14,7 +14,7 @@ from ..errors import UsageError
 from ..outputs import refuse_replacing_inputs
 from ..progress import progress_bar
 from ..review import draw_review_page
-from .render import check_fits
+from ..rendering import check_fits
 from ..wording import CLIP_INPUT_HELP, counted
 
 DEFAULT_EVERY = 5
