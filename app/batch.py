@@ -27,7 +27,7 @@ from seedtrack.data.atomic import atomic_path
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 
-from .errors import UsageError
+from .errors import UsageError, one_line as printable
 from .pipeline import DetectSettings, run_pipeline
 from .points import TrackingSettings
 
@@ -157,7 +157,8 @@ def run_clip(clip: str, shown: str, folder: str, marker: str, options: RunOption
 
 def one_line(error: BaseException, with_type: bool = False) -> str:
     """An exception's message on one line (``Type: message`` for an unexpected one)."""
-    text = " ".join(str(error).split()) or type(error).__name__
+    # Printed and written to batch.csv: a binary file's bytes quoted in it as escapes.
+    text = printable(" ".join(str(error).split())) or type(error).__name__
     return f"{type(error).__name__}: {text}" if with_type and text != type(error).__name__ else text
 
 

@@ -23,7 +23,7 @@ from typing import Sequence
 
 from seedtrack.data.errors import DataError, DataWarning
 
-from .errors import OptionError, UsageError, in_option_names
+from .errors import OptionError, UsageError, in_option_names, one_line
 from .processes import default_workers, start_fork_server
 
 # Command name -> the line ``seedtrack --help`` lists it with, in the order listed.
@@ -111,7 +111,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("always", DataWarning)
-            warnings.showwarning = lambda message, *_, **__: print(f"{prefix}: warning: {' '.join(str(message).splitlines())}", file=sys.stderr)
+            warnings.showwarning = lambda message, *_, **__: print(f"{prefix}: warning: {one_line(str(message))}", file=sys.stderr)
             if command == "run" and _workers_asked(argv) > 1:
                 # run's encoder process comes from the fork server: started before run's own
                 # imports, the server's imports (numpy, OpenCV, PyAV) run beside them.
@@ -154,6 +154,7 @@ def _workers_asked(argv: Sequence[str]) -> int:
 
 
 def _fail(prefix: str, message: str) -> int:
-    # One line whatever the message: a cause quoted from a library may hold a newline.
-    print(f"{prefix}: error: {' '.join(message.splitlines())}", file=sys.stderr)
+    # One line whatever the message: a cause quoted from a library may hold a newline, a file's
+    # content quoted in it control characters.
+    print(f"{prefix}: error: {one_line(message)}", file=sys.stderr)
     return EXIT_USAGE

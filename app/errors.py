@@ -41,6 +41,28 @@ def output_file(text: str) -> Path:
     return Path(text)
 
 
+# A message longer than this quotes a file past what anyone reads in a terminal line.
+_LONGEST_LINE = 1000
+
+
+def one_line(message: str) -> str:
+    r"""``message`` as one line a terminal shows as written: characters that are not printable
+    (control characters and escape sequences from a binary file given as text, a newline within
+    a quoted cause) as Python escapes, and a very long message cut in the middle.
+
+    Example
+    -------
+    >>> print(one_line("b.csv: missing column(s) frame; found fr\x1b[2Jame,\nx"))
+    b.csv: missing column(s) frame; found fr\x1b[2Jame, x
+    """
+    text = " ".join(message.splitlines())
+    text = "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
+    if len(text) > _LONGEST_LINE:
+        half = _LONGEST_LINE // 2
+        text = f"{text[:half]} ... ({len(text) - 2 * half} characters left out) ... {text[-half:]}"
+    return text
+
+
 def in_option_names(message: str, fields: Iterable[str]) -> str:
     """A library's message about its settings (``bad DishSpec: hidden_probability must be in
     [0, 1]``) in the command's words (``--hidden-probability must be in [0, 1]``).

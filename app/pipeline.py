@@ -25,11 +25,11 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
-from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError, warn
 from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import IMAGE_SUFFIXES, FrameSource, open_frames, read_mask
+from seedtrack.data.outputset import MANIFEST, RUN_FILES, output_set
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
@@ -39,6 +39,7 @@ from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.tracks import Tracks
 
 from .errors import OptionError, UsageError
+from .outputs import refuse_replacing_inputs
 from .points import TrackingSettings, group_points, track_frames
 from .parallel import VideoEncoder, read_ahead, threaded_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
@@ -468,22 +469,27 @@ def run_pipeline(
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking; the files are the same for any number.
 
-    Each file is written whole or not at all, in that order, so an interruption keeps what was
-    finished; an output folder made here and still empty is removed again.
+    The three files and ``manifest.json`` replace an earlier run's as one set
+    (:func:`seedtrack.data.outputset.output_set`): stopped at any point, the folder holds the
+    earlier set or this one, never a mix; an output folder made here and still empty is removed again.
     """
-    with output_folder(out):
+    inputs = [clip, *([detection.roi] if isinstance(detection.roi, Path) else [])]
+    refuse_replacing_inputs(inputs, [Path(out) / name for name in (*RUN_FILES, MANIFEST)])
+    with output_set(out, "seedtrack run", inputs) as files:
+        # Named now: a folder in a file's place is found before the clip is read, not after.
+        paths = {name: files.path(name) for name in RUN_FILES}
         # pandas, which writes the tables (a third of run's imports), loads in a thread beside
         # detection, whose threads leave part of a core free, rather than alone on one core.
         threading.Thread(target=importlib.import_module, args=("pandas",), daemon=True).start()
         found = detect_clip(clip, detection, workers=workers)
         detections = found.detections
         rows = detections.to_rows()
-        write_table(out / "detections.csv", rows)
+        write_table(paths["detections.csv"], rows)
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
-        with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
+        with VideoEncoder(paths["overlay.mp4"], found.fps, workers) as encoder:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
-            write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
+            write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks

@@ -32,6 +32,34 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+# More workers than this per core only queue for the cores, and each holds frames and a
+# process's memory: 1,000 started 1,000 processes and leaked their semaphores.
+WORKERS_PER_CORE = 4
+
+
+def check_worker_count(option: str, count: int) -> int:
+    """``count`` workers asked for with ``option``, if this machine can run them.
+
+    Raises
+    ------
+    UsageError
+        Below 1, or above :data:`WORKERS_PER_CORE` times the machine's cores.
+
+    Example
+    -------
+    >>> check_worker_count("--workers", 2)
+    2
+    """
+    from .errors import UsageError
+
+    most = WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if count < 1:
+        raise UsageError(f"{option} must be a whole number >= 1, got {count}")
+    if count > most:
+        raise UsageError(f"{option} {count} is more than this machine can run: at most {most} ({WORKERS_PER_CORE} per core, {os.cpu_count() or 1} cores)")
+    return count
+
+
 def can_start_processes() -> bool:
     """Whether this process may start worker processes (a daemonic one, such as a Dask
     worker's, may not).

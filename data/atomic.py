@@ -23,7 +23,8 @@ def check_target(path: str | os.PathLike) -> Path:
     Raises
     ------
     DataError
-        If the target's folder does not exist or is a file, or the target is a folder.
+        If the target's folder does not exist or is a file, or the target is a folder, a pipe
+        or a device.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
@@ -31,6 +32,9 @@ def check_target(path: str | os.PathLike) -> Path:
         raise DataError(target, f"{folder} is not a folder" if folder.exists() else f"folder {folder} does not exist")
     if target.is_dir():
         raise DataError(target, "is a folder; give a file name")
+    if target.exists() and not target.is_file():
+        # Renamed over, a pipe or a device (/dev/null, as root) would be replaced by a file.
+        raise DataError(target, "is not a regular file (a pipe or a device); give a file name")
     return folder
 
 

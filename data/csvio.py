@@ -11,6 +11,7 @@ import csv
 import itertools
 import os
 import re
+import warnings
 from functools import partial
 from pathlib import Path
 from typing import Callable, Iterator
@@ -22,6 +23,7 @@ from .errors import DataError, check_file, warn
 from .formats import CSV_FORMATS, EXTENSIONS, described
 from .formats.trackmate import check_pixels
 from .numbers import check_range
+from .outputset import check_member
 
 DETECTION_COLUMNS = ("frame", "x", "y", "area")
 TRACK_COLUMNS = ("track_id", "frame", "x", "y", "interpolated")
@@ -182,22 +184,27 @@ def read_table(
     import pandas as pd
 
     try:
-        frame = pd.read_csv(
-            path,
-            header=0,
-            names=header,
-            skiprows=range(1, 1 + label_rows),
-            index_col=False,
-            encoding="utf-8-sig",
-            dtype={name: str for name in text},
-            keep_default_na=False,
-            na_values={name: [""] for name in header if name not in text},
-            skipinitialspace=True,
-        )
+        with warnings.catch_warnings():
+            # pandas drops the fields of a row longer than the header, with a warning only.
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            frame = pd.read_csv(
+                path,
+                header=0,
+                names=header,
+                skiprows=range(1, 1 + label_rows),
+                index_col=False,
+                encoding="utf-8-sig",
+                dtype={name: str for name in text},
+                keep_default_na=False,
+                na_values={name: [""] for name in header if name not in text},
+                skipinitialspace=True,
+            )
     except UnicodeDecodeError as error:
         raise DataError.not_utf8(path, error) from None
     except pd.errors.ParserError as error:
         raise DataError(path, _parser_problem(error, len(header))) from None
+    except pd.errors.ParserWarning:
+        raise DataError(path, f"a row has more fields than the header's {len(header)}; its last fields would be lost") from None
     table: dict[str, np.ndarray] = {}
     for position, name in enumerate(header):
         if position == 0 and not name:
@@ -312,6 +319,8 @@ def read_points(path: str | os.PathLike, others_as_text: bool = False) -> dict[s
     array([1., 2.])
     """
     path = Path(path)
+    # First: a set left half in place by a killed run is finished before its file is read.
+    check_member(path)
     names, label_rows = _point_columns(path)
     table = read_table(path, required=tuple(names), integer=tuple(names)[:1], others_as_text=others_as_text, label_rows=label_rows)
     if label_rows or tuple(names) != ("frame", "x", "y"):

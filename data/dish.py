@@ -384,6 +384,11 @@ def _place_seeds(rng: np.random.Generator, count: int, max_radius: float, separa
     -------
     ndarray of float, shape (count, 2)
     """
+    # Discs of diameter `separation` centred within max_radius cover no more than their areas
+    # allow: ten million seeds are refused at once rather than after as many darts.
+    most = int(((max_radius + separation / 2) / (separation / 2)) ** 2)
+    if count > most:
+        raise ValueError(f"at most {most} seeds fit on the dish {separation:.1f} px apart, not {count}; use fewer seeds, shorter seeds or a larger frame")
     candidates = _uniform_in_disc(rng, count * _CANDIDATES_PER_SEED, max_radius)
     placed = np.empty((count, 2))
     n_placed = 0

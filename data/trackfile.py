@@ -32,6 +32,7 @@ from .errors import DataError, check_file
 from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
 from .formats.xmltree import root_tag
+from .outputset import check_member
 
 FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi}
 
@@ -59,6 +60,8 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
         has two points in one frame.
     """
     path = Path(path)
+    # First: a set left half in place by a killed run is finished before its file is read.
+    check_member(path)
     name = _check_format(format) if format is not None else _sniff(path)
     return rows_to_tracks(path, FORMATS[name].read(path))
 

@@ -267,16 +267,31 @@ class Page:
         ActionChains(self.browser).send_keys(key).perform()
         self.actions += 1
 
-    def click(self, x, y):
-        """Click the picture at image position (x, y) and wait for the page to take it in."""
+    def click(self, x, y, shift=False):
+        """Click the picture at image position (x, y) (with shift held: another track's point is
+        taken without asking) and wait for the page to take it in."""
         from selenium.webdriver.common.action_chains import ActionChains
+        from selenium.webdriver.common.keys import Keys
 
         edits = len(self.state("edits"))
         sx, sy = self.browser.execute_script("return window.annotate.toScreen(arguments[0], arguments[1])", float(x), float(y))
         width, height = self.browser.execute_script("return [arguments[0].clientWidth, arguments[0].clientHeight]", self.canvas)
-        ActionChains(self.browser).move_to_element_with_offset(self.canvas, round(sx - width / 2), round(sy - height / 2)).click().perform()
+        chain = ActionChains(self.browser).move_to_element_with_offset(self.canvas, round(sx - width / 2), round(sy - height / 2))
+        if shift:
+            chain = chain.key_down(Keys.SHIFT).click().key_up(Keys.SHIFT)
+        else:
+            chain = chain.click()
+        chain.perform()
         self.actions += 1
         _wait(self.browser, f"return window.annotate.state.edits.length > {edits}")
+
+    def click_only(self, x, y):
+        """Click the picture at image position (x, y), waiting for nothing."""
+        from selenium.webdriver.common.action_chains import ActionChains
+
+        sx, sy = self.browser.execute_script("return window.annotate.toScreen(arguments[0], arguments[1])", float(x), float(y))
+        width, height = self.browser.execute_script("return [arguments[0].clientWidth, arguments[0].clientHeight]", self.canvas)
+        ActionChains(self.browser).move_to_element_with_offset(self.canvas, round(sx - width / 2), round(sy - height / 2)).click().perform()
 
 
 def test_three_wrong_links_fixed_by_two_actions_each(browser, dish, tmp_path):
@@ -292,11 +307,36 @@ def test_three_wrong_links_fixed_by_two_actions_each(browser, dish, tmp_path):
         # Up to the wrong link the track is its true self: the true track it was in the frame before.
         previous = server.session.tracks.xy[list(server.session.tracks.track_ids).index(track), frame - 1]
         true_id = next(t for t, xy in truth_xy.items() if np.allclose(xy[frame - 1], previous))
-        page.click(*truth_xy[true_id][frame])
+        page.click(*truth_xy[true_id][frame], shift=True)
     server.shutdown()
     assert page.actions == 2 * len(SWAPS)
     assert _rows(read_tracks(tmp_path / TRACKS)) == _rows(truth)
     assert [line.split()[0] for line in (tmp_path / CORRECTIONS).read_text().splitlines() if not line.startswith("#")] == ["swap"] * 3
+
+
+def test_a_plain_click_on_another_tracks_point_asks_first(browser, dish, tmp_path):
+    folder, truth = dish
+    server = _serve(Session(read_tracks(folder / "wrong.csv"), tmp_path, folder / "wrong.csv"), folder / "clip.mp4", folder / "detections.csv")
+    page = Page(browser, server)
+    page.key("n")  # a doubtful place, its track selected
+    frame, track = page.state("frame"), page.state("selected")
+    rows = server.session.tracks.to_rows()
+    other = (rows["frame"] == frame) & (rows["track_id"] != track)
+    x, y, holder = float(rows["x"][other][0]), float(rows["y"][other][0]), int(rows["track_id"][other][0])
+    for answer in ("dismiss", "accept"):
+        page.click_only(x, y)
+        from selenium.webdriver.support import expected_conditions
+        from selenium.webdriver.support.ui import WebDriverWait
+
+        alert = WebDriverWait(browser, 10).until(expected_conditions.alert_is_present())
+        assert f"this is track {holder}'s point: the click would" in alert.text and f"from frame {frame} on" in alert.text
+        getattr(alert, answer)()
+        if answer == "dismiss":
+            _wait(browser, "return document.getElementById('status').textContent.startsWith('nothing changed')")
+            assert server.session.edits == []
+    _wait(browser, "return window.annotate.state.edits.length === 1")
+    server.shutdown()
+    assert server.session.edits[0].verb in ("swap", "join") and holder in server.session.edits[0].arguments
 
 
 def test_ground_truth_from_nothing_by_clicks(browser, tmp_path):

@@ -82,8 +82,8 @@ def test_bad_input_is_one_line_exit_2_and_no_outputs(tmp_path, make_input, messa
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("stage, kept", [("detect_clip", None), ("track_frames", ["detections.csv"])])
-def test_ctrl_c_keeps_finished_files_and_leaves_no_empty_folder(small_clip, tmp_path, capsys, monkeypatch, stage, kept):
+@pytest.mark.parametrize("stage", ["detect_clip", "track_frames"])
+def test_ctrl_c_leaves_no_part_of_a_set_and_no_empty_folder(small_clip, tmp_path, capsys, monkeypatch, stage):
     import seedtrack.pipeline
 
     def interrupted(*args, **kwargs):
@@ -93,11 +93,8 @@ def test_ctrl_c_keeps_finished_files_and_leaves_no_empty_folder(small_clip, tmp_
     out = tmp_path / "out"
     assert main(["run", str(small_clip / "clip.mp4"), "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err
-    if kept is None:
-        assert not out.exists()
-    else:
-        assert sorted(path.name for path in out.iterdir()) == kept
-        assert sorted(set(read_table(out / "detections.csv")["frame"])) == list(range(6))
+    # run's files are one set (see test_faults): the detections finished alone are not kept.
+    assert not out.exists()
 
 
 def test_unwritable_output_folder(small_clip, tmp_path):

@@ -273,7 +273,7 @@ def test_evaluate(result, truth, tol, out):
         a, b = write(folder / "a", *result), write(folder / "b", *truth)
         extra = ["--out", folder / "ev"] if out else []
         if outcome(["evaluate", a, "--truth", b, "--tol", tol, *extra], [folder / "ev" / "evaluation.json"], folder) == 0 and out:
-            assert {p.name for p in (folder / "ev").iterdir()} == {"evaluation.json", "wrong_tracks.csv", "errors.png"}
+            assert {p.name for p in (folder / "ev").iterdir()} == {"evaluation.json", "wrong_tracks.csv", "errors.png", "manifest.json"}
 
 
 EDIT = st.one_of(
@@ -366,7 +366,7 @@ def test_run(clip, extra):
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         if outcome(["run", clip, "--out", folder / "out", *extra], [], folder) == 0:
-            assert {p.name for p in (folder / "out").iterdir()} == {"detections.csv", "tracks.csv", "overlay.mp4"}
+            assert {p.name for p in (folder / "out").iterdir()} == {"detections.csv", "tracks.csv", "overlay.mp4", "manifest.json"}
 
 
 @fuzz("demo")

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import secrets
 import socket
+import sys
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
@@ -24,11 +25,12 @@ from urllib.parse import parse_qs, urlsplit
 import numpy as np
 
 from seedtrack.data.errors import DataError
+from seedtrack.data.numbers import MAX_ID
 from seedtrack.tracking.tracks import Tracks
 
 from .doubt import doubtful_places
 from .frames import FrameCache
-from .session import EditRefused, Session
+from .session import EditRefused, ReassignUnconfirmed, Session
 
 # The page's files: the only paths the server answers besides the API.
 _PAGE = {"/": ("index.html", "text/html; charset=utf-8"), "/app.js": ("app.js", "text/javascript; charset=utf-8"), "/app.css": ("app.css", "text/css; charset=utf-8")}
@@ -90,6 +92,43 @@ class AnnotateServer(ThreadingHTTPServer):
         self._detected_frames = _by_frame(detections, frames.frame_count)
         # The page names its script and style sheet with the token, as every request must carry it.
         self._page = {path: (resources.files(__package__).joinpath("static", name).read_bytes().replace(b"__TOKEN__", self.token.encode()), kind) for path, (name, kind) in _PAGE.items()}
+
+    def handle_error(self, request, client_address) -> None:
+        # A browser closed or reloaded mid-answer is no fault of the session: nothing to print.
+        if isinstance(sys.exc_info()[1], ConnectionError):
+            return
+        super().handle_error(request, client_address)
+
+    def frame_of(self, body: dict, name: str = "frame") -> int:
+        """``body[name]`` as a frame of the clip, as the readers of the session's files take it.
+
+        Raises
+        ------
+        ValueError
+            If it is not a whole number, or not a frame of the clip.
+        """
+        frame = _whole(body, name)
+        count = self.frames.frame_count
+        if frame < 0 or (count is not None and frame >= count):
+            # A stream's length is not known until its end: only the start bounds it.
+            frames = f"0..{count - 1}" if count is not None else ">= 0"
+            raise ValueError(f"{name} must be a frame of the clip, {frames}, got {frame}")
+        return frame
+
+    def position_of(self, body: dict) -> tuple[float, float]:
+        """``body``'s x and y as a position inside the clip's frames (pixels, centres at integers).
+
+        Raises
+        ------
+        ValueError
+            If either is not a finite number or lies outside the frames.
+        """
+        width, height = self.frames.size
+        x, y = _number(body, "x"), _number(body, "y")
+        for name, value, size in (("x", x, width), ("y", y, height)):
+            if not -0.5 <= value <= size - 0.5:
+                raise ValueError(f"{name} must lie inside the {width}x{height} frame ({-0.5:g}..{size - 0.5:g} pixels), got {value:g}")
+        return x, y
 
     def clip_info(self) -> dict:
         """What the page needs once: the clip's size, length and the detections."""
@@ -203,7 +242,10 @@ class _Handler(BaseHTTPRequestHandler):
             body = json.loads(self.rfile.read(length) or b"{}")
             if not isinstance(body, dict):
                 raise ValueError("not an object")
-            extra = action(self.server.session, body)
+            extra = action(self.server, body)
+        except ReassignUnconfirmed as error:
+            # The page asks, and sends the click again with "reassign": true if the user agrees.
+            return self._send(HTTPStatus.CONFLICT, json.dumps({"error": str(error), "reassign": str(error)}).encode(), "application/json")
         except EditRefused as error:
             return self._error(HTTPStatus.CONFLICT, str(error))
         except (ValueError, TypeError, KeyError) as error:
@@ -238,6 +280,8 @@ def _whole(body: dict, name: str, optional: bool = False) -> int | None:
         return None
     if not isinstance(value, int) or isinstance(value, bool):
         raise ValueError(f"{name} must be a whole number")
+    if abs(value) > MAX_ID:
+        raise ValueError(f"{name} must be at most {MAX_ID} in size, got {value}")
     return value
 
 
@@ -248,19 +292,20 @@ def _number(body: dict, name: str) -> float:
     return float(value)
 
 
-def _frame_of(body: dict) -> int:
-    frame = _whole(body, "frame")
-    if frame < 0:
-        raise ValueError("frame must be >= 0")
-    return frame
+def _click(server: AnnotateServer, body: dict) -> dict:
+    frame = server.frame_of(body)
+    x, y = server.position_of(body)
+    return {"selected": server.session.click(_whole(body, "selected", optional=True), frame, x, y, reassign=body.get("reassign") is True)}
 
 
-# Each action changes the session and returns what the page should know besides the new state.
+# Each action changes the session and returns what the page should know besides the new state;
+# every number is checked as the readers of the session's files check it, so that `correct` and
+# `render` take whatever the session writes.
 _ACTIONS = {
-    "/api/click": lambda session, body: {"selected": session.click(_whole(body, "selected", optional=True), _frame_of(body), _number(body, "x"), _number(body, "y"))},
-    "/api/split": lambda session, body: {"selected": session.split(_whole(body, "track"), _frame_of(body))},
-    "/api/delete": lambda session, body: session.delete(_whole(body, "track"), _frame_of(body) if "frame" in body else None) or {},
-    "/api/undo": lambda session, body: {"changed": session.undo()},
-    "/api/redo": lambda session, body: {"changed": session.redo()},
-    "/api/export": lambda session, body: {"exported": [path.name for path in session.export()]},
+    "/api/click": _click,
+    "/api/split": lambda server, body: {"selected": server.session.split(_whole(body, "track"), server.frame_of(body))},
+    "/api/delete": lambda server, body: server.session.delete(_whole(body, "track"), server.frame_of(body) if "frame" in body else None) or {},
+    "/api/undo": lambda server, body: {"changed": server.session.undo()},
+    "/api/redo": lambda server, body: {"changed": server.session.redo()},
+    "/api/export": lambda server, body: {"exported": [path.name for path in server.session.export()]},
 }

@@ -8,6 +8,8 @@ any moment leaves whole files.
 
 from __future__ import annotations
 
+import os
+import shlex
 import threading
 from pathlib import Path
 
@@ -26,12 +28,19 @@ EMPTY_START = "start.csv"
 # Every track format the project writes, and the file each export goes to.
 EXPORTS = {"csv": "tracks.csv", "trackpy": "tracks.trackpy.csv", "mot": "tracks.mot.txt", "trackmate": "tracks.trackmate.xml", "isbi": "tracks.isbi.xml"}
 assert set(EXPORTS) == set(FORMATS)
+# Every file a session may write into its folder.
+SESSION_FILES = (CORRECTIONS, TRACKS, EMPTY_START, *EXPORTS.values())
 # A click within this distance of a track's point (pixels) means that point.
 SAME_POINT = 0.5
 
 
 class EditRefused(ValueError):
     """An edit that does not apply to the tracks as they are (the message says why)."""
+
+
+class ReassignUnconfirmed(EditRefused):
+    """A click that would take another track's point, made without saying so: the message says
+    what it would do (a dense field puts a neighbour's point within reach of a small move)."""
 
 
 class Session:
@@ -86,7 +95,7 @@ class Session:
 
     # --- what a click means -------------------------------------------------------------------
 
-    def click(self, selected: int | None, frame: int, x: float, y: float) -> int:
+    def click(self, selected: int | None, frame: int, x: float, y: float, reassign: bool = True) -> int:
         """Apply what pointing at (x, y) in ``frame`` means, with track ``selected`` (or none) chosen.
 
         With no track selected, a point of a track selects that track and anywhere else starts
@@ -103,11 +112,19 @@ class Session:
             0-based frame index.
         x, y : float
             Pixels.
+        reassign : bool
+            Whether a click on another track's point may take it (a join or swap); if not, such
+            a click changes nothing.
 
         Returns
         -------
         int
             The track selected afterwards.
+
+        Raises
+        ------
+        ReassignUnconfirmed
+            If the click would join or swap and ``reassign`` is False; the message says which.
         """
         # Hundredths of a pixel are far below what a click can aim at, and keep the file readable.
         x, y = round(float(x), 2), round(float(y), 2)
@@ -124,6 +141,9 @@ class Session:
             if holder is not None:
                 later = self._frames.get(selected, np.empty(0, np.int64))
                 verb = "join" if not (later >= frame).any() else "swap"
+                if not reassign:
+                    what = f"join track {holder} to track {selected}" if verb == "join" else f"swap tracks {selected} and {holder}"
+                    raise ReassignUnconfirmed(f"this is track {holder}'s point: the click would {what} from frame {frame} on")
                 self._apply(Edit(verb, (selected, holder, frame), 0))
             else:
                 verb = "move" if frame in self._frame_sets.get(selected, ()) else "add"
@@ -214,21 +234,26 @@ class Session:
 
     def _save(self) -> None:
         with atomic_path(self.folder / CORRECTIONS) as temporary:
-            temporary.write_text(corrections_text(self.edits, self.start_path), encoding="utf-8")
+            temporary.write_text(corrections_text(self.edits, self.start_path, self.folder), encoding="utf-8")
         write_tracks(self.folder / TRACKS, self.tracks)
 
 
-def corrections_text(edits: list[Edit], start_path: Path) -> str:
-    """The edits as a corrections file, with a comment saying how to apply them.
+def corrections_text(edits: list[Edit], start_path: Path, folder: Path) -> str:
+    """The edits as a corrections file, with a comment saying how to apply them: a command that
+    works when run in ``folder`` (the file's own), whatever folder the session was started from.
 
     Example
     -------
-    >>> print(corrections_text([Edit("swap", (3, 5, 12), 1)], Path("tracks.csv")), end="")
-    # seedtrack annotate: edits to tracks.csv; apply with
-    #   seedtrack correct tracks.csv corrections.txt --out tracks.csv
+    >>> print(corrections_text([Edit("swap", (3, 5, 12), 1)], Path("/data/run 1/tracks.csv"), Path("/data/truth")), end="")
+    # seedtrack annotate: edits to /data/run 1/tracks.csv; in /data/truth, apply with
+    #   seedtrack correct '../run 1/tracks.csv' corrections.txt --out tracks.csv
     swap 3 5 12
     """
-    lines = [f"# seedtrack annotate: edits to {start_path}; apply with", f"#   seedtrack correct {start_path} {CORRECTIONS} --out {TRACKS}"]
+    start = os.path.relpath(os.path.abspath(start_path), os.path.abspath(folder))
+    lines = [
+        f"# seedtrack annotate: edits to {os.path.abspath(start_path)}; in {os.path.abspath(folder)}, apply with",
+        f"#   seedtrack correct {shlex.quote(start)} {CORRECTIONS} --out {TRACKS}",
+    ]
     lines += [" ".join(_word(value) for value in (edit.verb, *edit.arguments)) for edit in edits]
     return "\n".join(lines) + "\n"
 

@@ -14,8 +14,9 @@ from seedtrack.tracking.tracks import Tracks
 
 from ..annotate.frames import FrameCache
 from ..annotate.server import AnnotateServer
-from ..annotate.session import CORRECTIONS, TRACKS, Session
+from ..annotate.session import CORRECTIONS, SESSION_FILES, TRACKS, Session
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..wording import CLIP_INPUT_HELP
 
 
@@ -43,6 +44,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     if not 0 <= args.port <= 65535:
         raise UsageError(f"--port must be in 0..65535, got {args.port}")
+    refuse_replacing_inputs([args.input, args.tracks, args.detections, args.compare], [args.out / name for name in SESSION_FILES])
     start = read_tracks(args.tracks, args.format) if args.tracks is not None else Tracks.from_rows([], [], [], [])
     detections = read_table(args.detections, required=("frame", "x", "y")) if args.detections is not None else None
     other = read_tracks(args.compare, args.format) if args.compare is not None else None

@@ -13,6 +13,7 @@ from tqdm import tqdm
 
 from ..batch import ClipResult, RunOptions, clip_names, run_batch
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..parallel import default_workers
 from ..progress import progress_bar
 from ..wording import CLIP_INPUT_HELP, counted
@@ -60,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
     if args.scheduler is not None and args.workers is not None:
         raise UsageError("--workers sizes the local cluster; with --scheduler the cluster's own workers run the clips")
     clip_names(args.inputs)  # refuse clashing names before starting a cluster
+    refuse_replacing_inputs(args.inputs, [args.out / "batch.csv"])
     with _client(args.scheduler, workers_count(args)) as client, progress_bar(len(args.inputs), "clips", unit="clip") as bar:
 
         def show(result: ClipResult) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 from seedtrack.data.trackfile import FORMATS, read_tracks
 from seedtrack.tracking.tracks import Tracks
 
+from ..outputs import refuse_replacing_inputs
 from ..frame_output import write_frames
 from ..drawing import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
 from ..rendering import open_range, output_checked
@@ -49,6 +50,7 @@ def _short_name(path: Path, other: Path) -> str:
 def run(args: argparse.Namespace) -> int:
     settings = settings_of(RenderSettings, args)
     kind = output_checked(args.out, settings)
+    refuse_replacing_inputs([args.input, args.a, args.b], [args.out])
     check_tolerance(args.tol)
     a = read_tracks(args.a, args.format_a)
     b = read_tracks(args.b, args.format_b)

@@ -9,6 +9,7 @@ from seedtrack.data.corrections import apply_corrections, read_corrections
 from seedtrack.data.trackfile import FORMATS, read_tracks, write_tracks
 
 from ..errors import output_file
+from ..outputs import refuse_replacing_inputs
 from ..wording import counted
 
 
@@ -28,6 +29,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_replacing_inputs([args.tracks, args.edits], [args.out])
     tracks = read_tracks(args.tracks, args.format)
     edits = read_corrections(args.edits)
     corrected = apply_corrections(tracks, edits, args.edits)

@@ -61,7 +61,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise UsageError(in_option_names(str(error), ("seeds", "frames", "rim_speed", "random_seed", "hidden_probability"))) from None
     with output_folder(args.out):
-        scene = write_dish_clip(spec, args.out)
+        try:
+            scene = write_dish_clip(spec, args.out)
+        except ValueError as error:  # more seeds than fit on the dish
+            raise UsageError(f"--seeds {args.seeds}: {error}") from None
         run_pipeline(args.out / "clip.mp4", args.out, DetectSettings(), tracking, verbose=args.verbose)
     result = read_tracks(args.out / "tracks.csv")
     scores, _ = evaluate_tracks(result, scene.truth, args.tol)

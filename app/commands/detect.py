@@ -20,6 +20,7 @@ from seedtrack.detection.choice import describe
 from seedtrack.detection.roi import Circle
 
 from ..errors import UsageError, output_file
+from ..outputs import refuse_replacing_inputs
 from ..parallel import default_workers
 from ..drawing import SHIFT, draw_text, to_fixed
 from ..pipeline import DETECTORS, DetectSettings, detect_clip
@@ -193,6 +194,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--preview-frame needs --preview PNG")
     # Found out now rather than after a long clip has been read.
     check_table_name(args.out)
+    refuse_replacing_inputs([args.input, settings.roi if isinstance(settings.roi, Path) else None], [args.out, args.preview])
     for target in (args.out, args.preview):
         if target is not None:
             check_target(target)

@@ -9,15 +9,19 @@ import math
 import sys
 from pathlib import Path
 
-from seedtrack.data.atomic import atomic_path, output_folder
 from seedtrack.data.csvio import write_table
+from seedtrack.data.outputset import MANIFEST, output_set
 from seedtrack.data.trackfile import FORMATS, read_tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..scoring import DEFAULT_TOLERANCE, assess
 from ..settings import EvaluateSettings
 from . import settings_of
+
+# The files --out DIR receives.
+EVALUATION_FILES = ("evaluation.json", "wrong_tracks.csv", "errors.png")
 
 
 def add_parser(subparsers) -> None:
@@ -83,18 +87,19 @@ def truth_of(args: argparse.Namespace) -> Path:
 def run(args: argparse.Namespace) -> int:
     args.truth = truth_of(args)
     settings = settings_of(EvaluateSettings, args)
+    refuse_replacing_inputs([args.tracks, args.truth], [args.out / name for name in (*EVALUATION_FILES, MANIFEST)] if args.out is not None else [])
     measures, clear, wrong, hint = evaluate(args.tracks, args.truth, settings)
     print(format_table(measures))
     if hint is not None:
         print(hint, file=sys.stderr)
     if args.out is not None:
-        with output_folder(args.out), atomic_path(args.out / "evaluation.json") as temporary:
+        with output_set(args.out, "seedtrack evaluate", [args.tracks, args.truth]) as files:
             # JSON has no NaN: a measure undefined for empty input is written as null.
             clean = {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in measures.items()}
-            temporary.write_text(json.dumps(clean, indent=2) + "\n")
-        write_table(args.out / "wrong_tracks.csv", wrong)
-        series = {"missed": clear.frame_misses, "false positives": clear.frame_false_positives, "ID switches": clear.frame_switches}
-        title = f"errors per frame: {args.tracks.name} against {args.truth.name}, tolerance {args.tol:g} px"
-        write_png(args.out / "errors.png", draw_error_plot(clear.frames, series, title))
+            files.path("evaluation.json").write_text(json.dumps(clean, indent=2) + "\n")
+            write_table(files.path("wrong_tracks.csv"), wrong)
+            series = {"missed": clear.frame_misses, "false positives": clear.frame_false_positives, "ID switches": clear.frame_switches}
+            title = f"errors per frame: {args.tracks.name} against {args.truth.name}, tolerance {args.tol:g} px"
+            write_png(files.path("errors.png"), draw_error_plot(clear.frames, series, title))
         print(f"wrote {args.out / 'evaluation.json'}, {args.out / 'wrong_tracks.csv'}, {args.out / 'errors.png'}")
     return 0

@@ -15,6 +15,7 @@ from seedtrack.data.csvio import write_table
 from ..error_plot import draw_line_plot, write_png
 from ..errors import UsageError
 from ..experiments import EXPERIMENTS, PROTOCOLS, Experiment, Task, run_task, summarise, trackers_of
+from ..processes import check_worker_count
 from ..progress import progress_bar
 from ..wording import counted
 
@@ -53,8 +54,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise UsageError(f"--runs must be at least 1, got {args.runs}")
-    if args.jobs < 1:
-        raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+    check_worker_count("--jobs", args.jobs)
     experiment = EXPERIMENTS[args.name]
     trackers = trackers_of(experiment)
     cases = experiment.cases(args.tiny)

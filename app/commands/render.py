@@ -8,6 +8,7 @@ from pathlib import Path
 from seedtrack.data.csvio import read_points
 from seedtrack.data.trackfile import FORMATS, read_tracks
 
+from ..outputs import refuse_replacing_inputs
 from ..rendering import draw, output_checked
 from ..settings import RenderSettings
 from ..wording import CLIP_INPUT_HELP
@@ -57,6 +58,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     settings = settings_of(RenderSettings, args)
     kind = output_checked(args.out, settings, args.summary)
+    refuse_replacing_inputs([args.input, args.tracks, args.detections], [args.out, args.summary])
     tracks = read_tracks(args.tracks, args.format)
     detections = read_points(args.detections) if args.detections is not None else None
     print(draw(args.input, tracks, args.tracks, args.out, kind, settings, args.summary, detections, args.detections))

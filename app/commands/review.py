@@ -11,6 +11,7 @@ from seedtrack.data.trackfile import FORMATS, read_tracks
 
 from ..error_plot import write_png
 from ..errors import UsageError
+from ..outputs import refuse_replacing_inputs
 from ..progress import progress_bar
 from ..review import draw_review_page
 from ..rendering import check_fits
@@ -36,6 +37,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.every < 1:
         raise UsageError(f"--every must be at least 1, got {args.every}")
+    refuse_replacing_inputs([args.input, args.tracks], [args.out])
     tracks = read_tracks(args.tracks, args.format)
     last = tracks.first_frame + tracks.n_frames - 1
     wanted = set(range(tracks.first_frame, last + 1, args.every)) | {last}

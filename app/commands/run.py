@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import UsageError
 from ..parallel import default_workers
+from ..processes import check_worker_count
 from ..pipeline import run_pipeline
 from ..wording import CLIP_INPUT_HELP, counted
 from .detect import add_detection_options, detection_settings
@@ -31,13 +31,11 @@ def workers_count(args: argparse.Namespace) -> int:
     Raises
     ------
     UsageError
-        If --workers is below 1.
+        If --workers is below 1 or more than the machine can run.
     """
     if args.workers is None:
         return default_workers()
-    if args.workers < 1:
-        raise UsageError(f"--workers must be a whole number >= 1, got {args.workers}")
-    return args.workers
+    return check_worker_count("--workers", args.workers)
 
 
 def add_parser(subparsers) -> None:

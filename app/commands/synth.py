@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
-from seedtrack.data.numbers import MAX_COORDINATE_PX
+from seedtrack.data.numbers import MAX_COORDINATE_PX, MAX_FRAME
+from seedtrack.data.outputset import output_set
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.trackfile import write_tracks
 
@@ -85,6 +85,9 @@ def psmg_spec(args: argparse.Namespace) -> PSMGSpec:
         raise UsageError(f"--max-speed must be positive, got {args.max_speed:g}")
     if args.tracks < 1 or args.frames < 2:
         raise UsageError(f"need at least 1 track and 2 frames, got --tracks {args.tracks} --frames {args.frames}")
+    if args.frames > MAX_FRAME + 1:
+        # The files would hold frames that every reader refuses.
+        raise UsageError(f"--frames must be at most {MAX_FRAME + 1}, got {args.frames}")
     try:
         return PSMGSpec(
             trajectories=args.tracks,
@@ -106,8 +109,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{error}; use a larger --size or a lower --mean-speed") from None
     xy = np.concatenate(frames)
     frame = np.repeat(np.arange(len(frames)), [len(f) for f in frames])
-    with output_folder(args.out):
-        write_table(args.out / "points.csv", {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
-        write_tracks(args.out / "truth.csv", truth)
+    with output_set(args.out, "seedtrack synth", []) as files:
+        write_table(files.path("points.csv"), {"frame": frame, "x": xy[:, 0], "y": xy[:, 1]})
+        write_tracks(files.path("truth.csv"), truth)
     print(f"{counted(truth.n_tracks, 'trajectory', 'trajectories')}, {len(frames)} frames, {counted(frame.size, 'point')}; wrote {args.out / 'points.csv'}, {args.out / 'truth.csv'}")
     return 0

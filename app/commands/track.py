@@ -12,6 +12,7 @@ from seedtrack.tracking.trackers import TRACKERS
 
 from ..allocation import return_freed_memory
 from ..errors import output_file
+from ..outputs import refuse_replacing_inputs
 from ..points import Points, group_points, link_points, track_rows
 from ..settings import COMBINED_CHOICES, INDIVIDUAL_CHOICES, LinkSettings
 from ..wording import counted
@@ -121,6 +122,7 @@ def run(args: argparse.Namespace) -> int:
     # Now rather than after a long tracking run.
     check_target(args.out)
     output_format(args.out)
+    refuse_replacing_inputs([args.points], [args.out])
     points = read_points(args.points)
     tracks = link_points(points, settings, verbose=args.verbose)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""

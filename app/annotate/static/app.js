@@ -34,6 +34,13 @@ async function getJSON(path) {
 async function post(path, body = {}) {
   const response = await fetch(api(path), { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
   const reply = await response.json();
+  // A click on another track's point takes it only when the user says so: the server says what
+  // it would do, and the click is sent again if the user agrees (shift-click agrees beforehand).
+  if (response.status === 409 && reply.reassign) {
+    if (window.confirm(`${reply.reassign}. Do it?`)) return post(path, { ...body, reassign: true });
+    say("nothing changed (shift-click takes another track's point without asking)");
+    return null;
+  }
   if (!response.ok) { say(reply.error, true); return null; }
   takeState(reply);
   if ("selected" in reply && reply.selected !== null) state.selected = reply.selected;
@@ -343,7 +350,7 @@ function holderOf(x, y) {
   return null;
 }
 
-async function pointAt(sx, sy) {
+async function pointAt(sx, sy, reassign = false) {
   const snapped = target(sx, sy);
   const [x, y] = snapped || toImage(sx, sy);
   const holder = snapped ? holderOf(x, y) : null;
@@ -353,7 +360,7 @@ async function pointAt(sx, sy) {
     draw();
     return;
   }
-  const reply = await post("/api/click", { selected: state.selected, frame: state.frame, x, y });
+  const reply = await post("/api/click", { selected: state.selected, frame: state.frame, x, y, reassign });
   if (reply && state.autoAdvance && holder === null && state.frame < state.clip.frame_count - 1) step(1);
 }
 
@@ -368,7 +375,7 @@ canvas.addEventListener("mousemove", (event) => {
 canvas.addEventListener("mouseup", (event) => {
   const was = pressed;
   pressed = null;
-  if (was && !was.moved && event.button === 0) pointAt(event.offsetX, event.offsetY);
+  if (was && !was.moved && event.button === 0) pointAt(event.offsetX, event.offsetY, event.shiftKey);
 });
 canvas.addEventListener("wheel", (event) => { event.preventDefault(); zoomAt(event.offsetX, event.offsetY, Math.exp(-event.deltaY * 0.0015)); }, { passive: false });
 
