@@ -27,6 +27,7 @@ import numpy as np
 
 from seedtrack.tracking.tracks import Tracks
 
+from .calibration import Calibration
 from .csvio import text_lines
 from .errors import DataError, check_file
 from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
@@ -63,11 +64,31 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
     return rows_to_tracks(path, FORMATS[name].read(path))
 
 
+def read_calibration(path: str | os.PathLike, format: str | None = None) -> Calibration:
+    """The units a track file's positions and times are in, for the formats that say
+    (TrackMate XML); pixels and frames for the others.
+
+    Example
+    -------
+    >>> import tempfile, pathlib
+    >>> from seedtrack.tracking.tracks import Tracks
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "t.xml"
+    >>> write_tracks(out, Tracks.from_rows([0, 0], [0, 1], [1.0, 2.0], [1.0, 1.0]), units=Calibration(0.5, "micron", 2.0, "sec"))
+    >>> read_calibration(out)
+    Calibration(pixel_size=0.5, space_unit='micron', frame_interval=2.0, time_unit='sec')
+    """
+    path = Path(path)
+    name = _check_format(format) if format is not None else _sniff(path)
+    reader = getattr(FORMATS[name], "calibration", None)
+    return reader(path) if reader is not None else Calibration()
+
+
 def write_tracks(
     path: str | os.PathLike,
     tracks: Tracks,
     frame_indices: np.ndarray | None = None,
     format: str | None = None,
+    units: Calibration | None = None,
 ) -> None:
     """Write a track set, atomically, in the format given or implied by the extension.
 
@@ -82,6 +103,9 @@ def write_tracks(
         column ``c`` is frame ``tracks.first_frame + c``.
     format : str, optional
         One of :data:`FORMATS`.
+    units : Calibration, optional
+        Physical units, for the formats that hold them (TrackMate XML); the others stay in
+        pixels and frames.
 
     Raises
     ------
@@ -91,7 +115,7 @@ def write_tracks(
     rows = tracks.to_rows()
     if frame_indices is not None:
         rows["frame"] = np.asarray(frame_indices)[rows["frame"] - tracks.first_frame]
-    write_rows(path, rows, format)
+    write_rows(path, rows, format, units)
 
 
 def output_format(path: str | os.PathLike, format: str | None = None) -> str:
@@ -116,16 +140,21 @@ def output_format(path: str | os.PathLike, format: str | None = None) -> str:
     return names[0]
 
 
-def write_rows(path: str | os.PathLike, rows: dict[str, np.ndarray], format: str | None = None) -> None:
+def write_rows(path: str | os.PathLike, rows: dict[str, np.ndarray], format: str | None = None, units: Calibration | None = None) -> None:
     """Write flat track rows (the columns of :meth:`Tracks.to_rows`; our CSV also keeps any
-    further columns, after those) atomically, in the format :func:`output_format` picks.
+    further columns, after those) atomically, in the format :func:`output_format` picks, in
+    ``units`` where the format holds units.
 
     Raises
     ------
     DataError
         If the format is unknown or the file cannot be written.
     """
-    FORMATS[output_format(path, format)].write(Path(path), rows)
+    module = FORMATS[output_format(path, format)]
+    if getattr(module, "calibration", None) is not None:
+        module.write(Path(path), rows, units)
+    else:
+        module.write(Path(path), rows)
 
 
 def _check_format(name: str) -> str:
