@@ -107,3 +107,16 @@ def test_analyze_writes_the_same_bytes_twice(tmp_path):
     assert set(names) == plots | {"drift.csv", "msd.csv", "msd_per_track.csv", "velocity.csv"}
     for name in names:
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
+
+
+def test_track_writes_trackmate_in_the_units_given(tmp_path, capsys):
+    tracks = _pixel_tracks()
+    pd.DataFrame({"frame": tracks.point_column, "x": tracks.point_xy[:, 0], "y": tracks.point_xy[:, 1]}).to_csv(tmp_path / "points.csv", index=False)
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.xml"), "--pixel-size", "0.5", "--frame-interval", "0.1"]) == 0
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv")]) == 0
+    assert read_calibration(tmp_path / "t.xml") == Calibration(0.5, "um", 0.1, "s")
+    in_pixels, calibrated = read_tracks(tmp_path / "t.csv"), read_tracks(tmp_path / "t.xml")
+    np.testing.assert_allclose(calibrated.point_xy, in_pixels.point_xy)
+    assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "u.xml"), "--pixel-size", "-1"]) == 2
+    assert "--pixel-size must be a positive number" in capsys.readouterr().err
+    assert not (tmp_path / "u.xml").exists()

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from seedtrack.data.corrections import apply_corrections, read_corrections
-from seedtrack.data.trackfile import FORMATS, read_tracks, write_tracks
+from seedtrack.data.trackfile import FORMATS, read_calibration, read_tracks, write_tracks
 
 from ..errors import output_file
 from ..wording import counted
@@ -31,6 +31,7 @@ def run(args: argparse.Namespace) -> int:
     tracks = read_tracks(args.tracks, args.format)
     edits = read_corrections(args.edits)
     corrected = apply_corrections(tracks, edits, args.edits)
-    write_tracks(args.out, corrected, format=args.out_format)
+    # A calibrated TrackMate truth stays in its units.
+    write_tracks(args.out, corrected, format=args.out_format, units=read_calibration(args.tracks, args.format))
     print(f"applied {counted(len(edits), 'edit')}: {counted(tracks.n_tracks, 'track')} in, {corrected.n_tracks} out; wrote {args.out}")
     return 0

@@ -24,6 +24,7 @@ from ..errors import UsageError, option_name, output_file
 from ..points import Points, group_points, point_rows, track_frames
 from ..wording import counted
 from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
+from .units import add_unit_options, calibration_from
 
 # How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
 FIRST_LINKS = {
@@ -98,6 +99,7 @@ def add_parser(subparsers) -> None:
         help="tracker (default goa-updown)",
     )
     add_tracker_options(parser)
+    add_unit_options(parser)
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
@@ -239,6 +241,7 @@ def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
 
 def run(args: argparse.Namespace) -> int:
     check_options(args)
+    units = calibration_from(args)
     return_freed_memory()
     # Now rather than after a long tracking run.
     check_target(args.out)
@@ -250,6 +253,6 @@ def run(args: argparse.Namespace) -> int:
     rows = track_rows(points, tracks)
     # Only the rows are written: the points and tracks freed do not add to the writer's peak.
     del points, tracks
-    write_rows(args.out, rows)
+    write_rows(args.out, rows, units=units)
     print(f"{counts}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}")
     return 0
