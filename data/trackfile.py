@@ -11,6 +11,8 @@ trackpy    trackpy's table (frame,particle,x,y)          ``.csv`` with a ``parti
 mot        MOTChallenge text (1-based frames, boxes)     ``.txt``
 trackmate  TrackMate XML (spots, edges, tracks)          ``.xml`` with root ``<TrackMate>``
 isbi       ISBI 2012 particle-tracking challenge XML     ``.xml`` with root ``<root>``
+geff       GEFF graph (a zarr folder), via ``geff``      ``.geff``
+napari     napari Tracks layer array (ID, T, Y, X)       ``.npy``
 ========== ============================================= =====================================
 
 The extensions come from the one table :data:`seedtrack.data.formats.EXTENSIONS`, which writers
@@ -30,11 +32,11 @@ from seedtrack.tracking.tracks import Tracks
 from .calibration import Calibration
 from .csvio import text_lines
 from .errors import DataError, check_file
-from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
+from .formats import EXTENSIONS, described, geff, isbi, mot, napari, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
 from .formats.xmltree import root_tag
 
-FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi}
+FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi, "geff": geff, "napari": napari}
 
 
 def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
@@ -44,8 +46,8 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
     ----------
     path : path-like
     format : str, optional
-        One of ``csv``, ``trackpy``, ``mot``, ``trackmate``, ``isbi``; by default chosen from the
-        extension and, for ``.csv`` and ``.xml``, the header or root element.
+        One of :data:`FORMATS`; by default chosen from the extension and, for ``.csv`` and
+        ``.xml``, the header or root element.
 
     Returns
     -------
@@ -66,7 +68,7 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
 
 def read_calibration(path: str | os.PathLike, format: str | None = None) -> Calibration:
     """The units a track file's positions and times are in, for the formats that say
-    (TrackMate XML); pixels and frames for the others.
+    (TrackMate XML, GEFF); pixels and frames for the others.
 
     Example
     -------
@@ -95,8 +97,8 @@ def write_tracks(
     Parameters
     ----------
     path : path-like
-        ``.csv`` writes our ``tracks.csv``, ``.txt`` MOTChallenge, ``.xml`` TrackMate, unless
-        ``format`` says otherwise.
+        ``.csv`` writes our ``tracks.csv``, ``.txt`` MOTChallenge, ``.xml`` TrackMate, ``.geff``
+        GEFF, ``.npy`` napari's tracks array, unless ``format`` says otherwise.
     tracks : Tracks
     frame_indices : ndarray of int, optional
         0-based clip frame index of each track-set column, when frames were skipped; by default
@@ -104,8 +106,8 @@ def write_tracks(
     format : str, optional
         One of :data:`FORMATS`.
     units : Calibration, optional
-        Physical units, for the formats that hold them (TrackMate XML); the others stay in
-        pixels and frames.
+        Physical units, for the formats that hold them (TrackMate XML, GEFF); the others stay
+        in pixels and frames.
 
     Raises
     ------
@@ -168,6 +170,8 @@ def _known() -> str:
 
 
 def _sniff(path: Path) -> str:
+    if path.suffix.lower() == ".geff":
+        return "geff"  # a folder, which the reader checks
     check_file(path)
     names = EXTENSIONS.get(path.suffix.lower())
     if names is None:

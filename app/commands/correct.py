@@ -21,7 +21,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to correct (any track format)")
     parser.add_argument("edits", type=Path, metavar="EDITS", help="corrections file")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt or .xml)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt, .xml, .geff or .npy)")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--out-format", choices=sorted(FORMATS), default=None, help="format of the output (default: from its extension)")
     parser.set_defaults(run=run)

@@ -91,7 +91,7 @@ def add_parser(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge) or .xml (TrackMate)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge), .xml (TrackMate), .geff (GEFF) or .npy (napari)")
     parser.add_argument(
         "--algorithm",
         choices=("goa", *TRACKERS),

@@ -53,7 +53,7 @@ def read(path) -> Rows:
                 if spot_id not in spots:
                     raise DataError(path, f"line {edge.line}: edge names spot {spot_id}, which is not in AllSpots")
             edges.append(sorted(ends, key=lambda spot_id: spots[spot_id][0]))  # earlier frame first
-        tracks.append((track_id, _branches(edges)))
+        tracks.append((track_id, unbranched_runs(edges)))
     rows, branched = [], 0
     next_id = max((track_id for track_id, _ in tracks), default=-1) + 1
     for track_id, branches in tracks:
@@ -182,7 +182,7 @@ def write(path, rows: dict[str, np.ndarray], units: Calibration | None = None) -
     write_xml(path, root)
 
 
-def _branches(edges: list[list[int]]) -> list[list[int]]:
+def unbranched_runs(edges: list[list[int]]) -> list[list[int]]:
     """The unbranched runs of spots of one track, from its (earlier, later) edges: a run ends
     where a spot has other than one successor, or its successor other than one predecessor."""
     after: dict[int, list[int]] = {}
