@@ -120,3 +120,49 @@ def test_track_writes_trackmate_in_the_units_given(tmp_path, capsys):
     assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "u.xml"), "--pixel-size", "-1"]) == 2
     assert "--pixel-size must be a positive number" in capsys.readouterr().err
     assert not (tmp_path / "u.xml").exists()
+
+
+def _imagej_tiff(path, pixel_size=0.25):
+    import tifffile
+
+    frames = np.full((3, 120, 160), 40, np.uint8)
+    tifffile.imwrite(path, frames, imagej=True, resolution=(1 / pixel_size, 1 / pixel_size), metadata={"unit": "\\u00B5m", "finterval": 0.5, "axes": "TYX"})
+
+
+def test_tiff_resolution_tags_give_the_clips_units(tmp_path):
+    import tifffile
+
+    from seedtrack.data.clip_units import tiff_calibration
+
+    _imagej_tiff(tmp_path / "ij.tif")
+    assert tiff_calibration(tmp_path / "ij.tif") == Calibration(0.25, "µm", 0.5, "s")
+    tifffile.imwrite(tmp_path / "cm.tif", np.zeros((8, 8), np.uint8), resolution=(20000, 20000), resolutionunit=3)
+    assert tiff_calibration(tmp_path / "cm.tif") == Calibration(0.5, "um")
+    # Dots per inch are a print size, not a calibration.
+    tifffile.imwrite(tmp_path / "dpi.tif", np.zeros((8, 8), np.uint8), resolution=(72, 72), resolutionunit=2)
+    assert tiff_calibration(tmp_path / "dpi.tif") == Calibration()
+
+
+def test_render_of_a_calibrated_tiff_has_a_scale_bar(tmp_path):
+    import cv2
+
+    _imagej_tiff(tmp_path / "clip.tif")
+    write_tracks(tmp_path / "t.csv", Tracks.from_rows([0, 0, 0], [0, 1, 2], [10.0, 20.0, 30.0], [50.0, 50.0, 50.0]))
+    assert main(["render", str(tmp_path / "clip.tif"), str(tmp_path / "t.csv"), "--out", str(tmp_path / "bar.png"), "--scale", "2"]) == 0
+    assert main(["render", str(tmp_path / "clip.tif"), str(tmp_path / "t.csv"), "--out", str(tmp_path / "none.png"), "--scale", "2", "--space-unit", "pixel", "--pixel-size", "1"]) == 0
+    bar, none = cv2.imread(str(tmp_path / "bar.png")), cv2.imread(str(tmp_path / "none.png"))
+    # 20% of 320 drawn pixels is 8 um at 0.25 um a pixel, enlarged twice: a 5 um bar, 40 pixels long.
+    # The bar spans columns 268-308 of rows 224-228; column 266 is outside it.
+    corner = (slice(-16, -12), slice(-52, -12))
+    assert (bar[corner] == 255).all() and not (bar[-16:-12, -54] == 255).all(axis=1).any()
+    assert not (none[corner] == 255).all(axis=2).any()
+
+
+def test_analyze_takes_a_videos_frame_rate_with_clip(tmp_path, capsys):
+    from seedtrack.data.video import write_video
+
+    write_video(tmp_path / "clip.mp4", (np.full((32, 32, 3), 60, np.uint8) for _ in range(3)), fps=20.0)
+    write_tracks(tmp_path / "t.csv", _pixel_tracks())
+    assert main(["analyze", str(tmp_path / "t.csv"), "--out", str(tmp_path / "a"), "--clip", str(tmp_path / "clip.mp4")]) == 0
+    assert pd.read_csv(tmp_path / "a" / "msd.csv")["lag_time"].tolist()[:2] == [0.05, 0.1]
+    assert "pixel^2/s" in capsys.readouterr().out

@@ -27,13 +27,14 @@ def add_parser(subparsers) -> None:
         "compute_drift), DIR/velocity.csv (per track: duration, path length, mean speed, net velocity) and "
         "plots of the MSD in log-log with the fitted diffusion coefficient and exponent (MSD = 4 D t^alpha), "
         "of the speed distribution and of the drift, as PNG and SVG. Only measured points count. Units: pixels "
-        "and frames, unless --pixel-size and --frame-interval are given or TRACKS carries a calibration "
-        "(TrackMate XML). See docs/analysis.md.",
+        "and frames, unless --pixel-size and --frame-interval are given, TRACKS carries a calibration "
+        "(TrackMate XML, GEFF) or --clip names a calibrated TIFF or a video (its frame rate). See docs/analysis.md.",
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks in any format seedtrack reads")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder for the tables and plots")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--max-lag", type=int, default=DEFAULT_MAX_LAG, metavar="FRAMES", help=f"longest MSD lag (default {DEFAULT_MAX_LAG})")
+    parser.add_argument("--clip", type=Path, default=None, metavar="CLIP", help="take the units from the clip the tracks come from: a calibrated TIFF's pixel size and frame interval, a video's frame rate")
     parser.add_argument("--fit-lags", type=int, default=DEFAULT_FIT_LAGS, metavar="N", help=f"fit D and alpha over the first N lags (default {DEFAULT_FIT_LAGS})")
     add_unit_options(parser)
     parser.set_defaults(run=run)
@@ -46,7 +47,13 @@ def run(args: argparse.Namespace) -> int:
         if getattr(args, name) < 1:
             raise UsageError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(args, name)}")
     tracks = read_tracks(args.tracks, args.format)
-    units = calibration_from(args, read_calibration(args.tracks, args.format))
+    if args.clip is not None:
+        from seedtrack.data.clip_units import clip_calibration
+
+        read = clip_calibration(args.clip)
+    else:
+        read = read_calibration(args.tracks, args.format)
+    units = calibration_from(args, read)
     space, time = units.space_unit, units.time_unit
     scale = (units.pixel_size, units.frame_interval)
     ensemble = msd_table(tracks, *scale, args.max_lag)

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
+from seedtrack.data.clip_units import tiff_calibration
 from seedtrack.data.csvio import read_points
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames
@@ -18,7 +19,9 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..frame_output import output_kind, write_frames
 from ..drawing import FalseDetections, TrackLayer, View, annotate_frames, summary_picture, track_legend
+from ..scale_bar import with_scale_bar
 from ..wording import CLIP_INPUT_HELP, counted
+from .units import add_unit_options, calibration_from
 
 DEFAULT_TRAIL = 10
 # Beyond what any player shows, or GIF's 1/100 s frame delays can hold.
@@ -58,11 +61,12 @@ def add_parser(subparsers) -> None:
         "crossed out (with --detections), a legend and the frame number.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
-    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
+    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml, GEFF, napari npy)")
     add_view_options(parser, out_required=False)
     parser.add_argument("--summary", type=Path, default=None, metavar="PNG", help="also draw every whole trajectory over the first frame into this PNG")
     parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): mark those that no track holds")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    add_unit_options(parser)
     parser.set_defaults(run=run)
 
 
@@ -191,6 +195,7 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
     """Draw ``tracks`` over ``args.input`` into ``args.out`` (``kind``, see
     :func:`check_view_options`) and ``args.summary``, as the options say; ``args.tracks`` names
     the tracks in errors. Detections (columns frame, x, y) that no track holds are crossed out.
+    A scale bar is drawn when the clip (a calibrated TIFF) or ``--pixel-size`` gives a length unit.
 
     Returns
     -------
@@ -199,18 +204,21 @@ def draw(args: argparse.Namespace, kind: str | None, tracks: Tracks, detections:
     """
     if args.summary is not None and Path(args.summary).suffix.lower() != ".png":
         raise UsageError(f"--summary must be a .png file, got {args.summary}")
+    units = calibration_from(args, tiff_calibration(args.input))
     with open_range(args, kind, [(args.tracks, tracks)]) as source:
         view = View.of(source.size, args.crop, args.scale)
+        enlarged = view.size[0] / (view.box[2] - view.box[0])
         layer = TrackLayer(tracks, view, trail=args.trail, labels=args.labels)
         if args.summary is not None:
             _, first = next(open_frames(args.input, start=args.start, end=args.start + 1).shown())
-            write_png(args.summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
+            picture = summary_picture(first, view, [layer], counted(tracks.n_tracks, "track"))
+            write_png(args.summary, next(with_scale_bar([(0, picture)], units, enlarged))[1])
         if kind is None:
             return f"wrote {args.summary}"
         false = None
         if detections is not None:
             check_fits(args.detections, detections["frame"], detections["x"], detections["y"], source, args.input, "detections")
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
-        frames = annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None))
+        frames = with_scale_bar(annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None)), units, enlarged)
         count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
     return f"wrote {args.out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {args.summary}" if args.summary else "")
