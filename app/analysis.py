@@ -13,13 +13,20 @@ import math
 
 import pandas as pd
 
-from seedtrack.tracking.analysis import drift_table, msd_table, velocity_table
+from seedtrack.tracking.analysis import drift_table, msd_table, velocity_table, without_drift
 from seedtrack.tracking.tracks import Tracks
 
 from .api import PathLike, _tracks
 
 
-def msd(tracks: pd.DataFrame | PathLike | Tracks, pixel_size: float = 1.0, frame_interval: float = 1.0, max_lag: int = 100, per_track: bool = False) -> pd.DataFrame:
+def msd(
+    tracks: pd.DataFrame | PathLike | Tracks,
+    pixel_size: float = 1.0,
+    frame_interval: float = 1.0,
+    max_lag: int = 100,
+    per_track: bool = False,
+    subtract_drift: bool = False,
+) -> pd.DataFrame:
     """Mean squared displacement against lag time, as trackpy's ``emsd`` (or ``imsd`` per track).
 
     Parameters
@@ -33,6 +40,8 @@ def msd(tracks: pd.DataFrame | PathLike | Tracks, pixel_size: float = 1.0, frame
         Longest lag, frames.
     per_track : bool
         One row per track and lag, with a ``track_id`` column.
+    subtract_drift : bool
+        Take the drift (:func:`drift`) off the positions first, as trackpy's ``subtract_drift``.
 
     Returns
     -------
@@ -49,7 +58,8 @@ def msd(tracks: pd.DataFrame | PathLike | Tracks, pixel_size: float = 1.0, frame
     _check_units(pixel_size, frame_interval)
     if not (isinstance(max_lag, int) and max_lag >= 1):
         raise ValueError(f"max_lag must be a whole number of frames of at least 1, got {max_lag!r}")
-    return pd.DataFrame(msd_table(_tracks(tracks, "tracks")[0], pixel_size, frame_interval, max_lag, per_track))
+    table = _tracks(tracks, "tracks")[0]
+    return pd.DataFrame(msd_table(without_drift(table) if subtract_drift else table, pixel_size, frame_interval, max_lag, per_track))
 
 
 def drift(tracks: pd.DataFrame | PathLike | Tracks, pixel_size: float = 1.0, frame_interval: float = 1.0) -> pd.DataFrame:

@@ -74,3 +74,15 @@ def test_velocity_per_track_in_the_units_given():
 def test_units_must_be_positive(walkers):
     with pytest.raises(ValueError, match="pixel_size"):
         seedtrack.msd(walkers, pixel_size=0)
+
+
+def test_msd_with_the_drift_subtracted_is_the_walk_and_trackpys():
+    walkers = _walkers(seed=2, n_tracks=300, n_frames=40, drift=(1.0, 0.5))
+    carried = seedtrack.msd(walkers, max_lag=10)
+    table = seedtrack.msd(walkers, max_lag=10, subtract_drift=True)
+    theory = 2 * STEP**2 * table["lag"]
+    assert np.all(np.abs(table["msd"] / theory - 1) < 0.05)
+    assert carried["msd"].iloc[-1] > 1.5 * theory.iloc[-1]  # the current adds (v t)^2
+    particles = walkers.rename(columns={"track_id": "particle"})
+    theirs = trackpy.emsd(trackpy.subtract_drift(particles, trackpy.compute_drift(particles)).reset_index(drop=True), mpp=1.0, fps=1.0, max_lagtime=10)
+    np.testing.assert_allclose(table["msd"].to_numpy(), theirs.to_numpy(), rtol=0.02)

@@ -8,6 +8,8 @@ frames by default). Tables are dicts of equal-length columns.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .tracks import Tracks
@@ -187,3 +189,22 @@ def velocity_table(tracks: Tracks, pixel_size: float = 1.0, frame_interval: floa
         "vy": net[:, 1],
         "net_speed": np.hypot(net[:, 0], net[:, 1]),
     }
+
+
+def without_drift(tracks: Tracks) -> Tracks:
+    """``tracks`` with the drift of :func:`drift_table` taken off every point (as trackpy's
+    ``subtract_drift``), so that an MSD measures the motion of the objects, not of the medium.
+
+    Example
+    -------
+    >>> tracks = Tracks.from_rows([0, 0, 1, 1], [0, 1, 0, 1], [0.0, 2.0, 5.0, 7.0], [0.0, 0.0, 1.0, 1.0])
+    >>> without_drift(tracks).point_xy[:, 0]
+    array([0., 0., 5., 5.])
+    """
+    table = drift_table(tracks)
+    if table["frame"].size == 0:
+        return tracks
+    shift = np.column_stack((table["x"], table["y"]))
+    # Interpolated points lie between measured ones, so within the drift's frames.
+    at = np.clip(tracks.point_column + tracks.first_frame - table["frame"][0], 0, table["frame"].size - 1)
+    return replace(tracks, point_xy=tracks.point_xy - shift[at])

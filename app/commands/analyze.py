@@ -8,7 +8,7 @@ from pathlib import Path
 from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
 from seedtrack.data.trackfile import FORMATS, read_calibration, read_tracks
-from seedtrack.tracking.analysis import drift_table, fit_msd, msd_table, velocity_table
+from seedtrack.tracking.analysis import drift_table, fit_msd, msd_table, velocity_table, without_drift
 
 from ..errors import UsageError
 from .units import add_unit_options, calibration_from
@@ -35,6 +35,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--max-lag", type=int, default=DEFAULT_MAX_LAG, metavar="FRAMES", help=f"longest MSD lag (default {DEFAULT_MAX_LAG})")
     parser.add_argument("--clip", type=Path, default=None, metavar="CLIP", help="take the units from the clip the tracks come from: a calibrated TIFF's pixel size and frame interval, a video's frame rate")
+    parser.add_argument("--subtract-drift", action="store_true", help="take the drift off the positions before the MSD and velocities (as trackpy's subtract_drift)")
     parser.add_argument("--fit-lags", type=int, default=DEFAULT_FIT_LAGS, metavar="N", help=f"fit D and alpha over the first N lags (default {DEFAULT_FIT_LAGS})")
     add_unit_options(parser)
     parser.set_defaults(run=run)
@@ -56,9 +57,11 @@ def run(args: argparse.Namespace) -> int:
     units = calibration_from(args, read)
     space, time = units.space_unit, units.time_unit
     scale = (units.pixel_size, units.frame_interval)
+    drift = drift_table(tracks, *scale)
+    if args.subtract_drift:
+        tracks = without_drift(tracks)
     ensemble = msd_table(tracks, *scale, args.max_lag)
     fit = fit_msd(ensemble["lag_time"][: args.fit_lags], ensemble["msd"][: args.fit_lags])
-    drift = drift_table(tracks, *scale)
     velocity = velocity_table(tracks, *scale)
     name = args.tracks.name
     with output_folder(args.out):
