@@ -27,7 +27,9 @@ def msd(
     per_track: bool = False,
     subtract_drift: bool = False,
 ) -> pd.DataFrame:
-    """Mean squared displacement against lag time, as trackpy's ``emsd`` (or ``imsd`` per track).
+    """Mean squared displacement against lag time over all tracks, every point pair weighing the
+    same (trackpy's ``emsd`` weighs tracks otherwise, see
+    :func:`seedtrack.tracking.analysis.msd_table`), or per track (its ``imsd``).
 
     Parameters
     ----------

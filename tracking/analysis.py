@@ -56,8 +56,12 @@ def displacements(tracks: Tracks, max_lag: int) -> tuple[np.ndarray, np.ndarray]
 
 
 def msd_table(tracks: Tracks, pixel_size: float = 1.0, frame_interval: float = 1.0, max_lag: int = 100, per_track: bool = False) -> dict[str, np.ndarray]:
-    """Mean squared displacement against lag time, over all tracks (as trackpy's ``emsd``:
-    every point pair weighs the same) or per track (as its ``imsd``).
+    """Mean squared displacement against lag time, over all tracks or per track (trackpy's
+    ``emsd`` and ``imsd``).
+
+    Over all tracks every point pair weighs the same. trackpy's ``emsd`` weighs each track's
+    MSD by its effective number of independent displacements instead: the same on tracks of
+    one length, up to 10% apart on many short tracks of unequal lengths (docs/analysis.md).
 
     Parameters
     ----------

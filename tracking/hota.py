@@ -1,9 +1,9 @@
 """HOTA, the higher-order tracking accuracy (Luiten et al., IJCV 2021), for points.
 
 HOTA needs a similarity in [0, 1] between a true and a result point; for boxes it is their
-overlap. For points we use ``S = max(0, 1 - d / tolerance)`` with ``d`` the distance, the
-linear similarity of the point-tracking adaptations (as in the Cell Tracking Challenge's and
-SPT adaptations): a point at the true position scores 1, one at the tolerance 0. HOTA is then
+overlap. For points we use ``S = max(0, 1 - d / tolerance)`` with ``d`` the distance, a
+linear distance similarity as adaptations of HOTA to point tracking use: a point at the true
+position scores 1, one at the tolerance 0. HOTA is then
 computed as TrackEval (``trackeval.metrics.HOTA``, the reference code) computes it: for each
 threshold alpha in 0.05, 0.10 ... 0.95, points are matched frame by frame by an optimal
 assignment weighted by how often the two tracks coincide over the whole clip, matches with

@@ -22,8 +22,8 @@ SIGNIFICANT = "%.8g"
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "analyze",
-        description="Write DIR/msd.csv (mean squared displacement against lag time over all tracks, as trackpy's "
-        "emsd), DIR/msd_per_track.csv, DIR/drift.csv (the tracks' mean step summed over time, as trackpy's "
+        description="Write DIR/msd.csv (mean squared displacement against lag time over all point pairs of all "
+        "tracks), DIR/msd_per_track.csv, DIR/drift.csv (the tracks' mean step summed over time, as trackpy's "
         "compute_drift), DIR/velocity.csv (per track: duration, path length, mean speed, net velocity) and "
         "plots of the MSD in log-log with the fitted diffusion coefficient and exponent (MSD = 4 D t^alpha), "
         "of the speed distribution and of the drift, as PNG and SVG. Only measured points count. Units: pixels "
