@@ -145,7 +145,9 @@ def link(points: pd.DataFrame, **options) -> pd.DataFrame:
     >>> tracks[tracks.interpolated == 1][["frame", "x", "y"]].values.tolist()
     [[3.0, 19.0, 50.0]]
     """
-    args = _arguments(track_command, ["POINTS.csv", "--out", "tracks.csv"], options, "link")
+    # The units only change the file the command writes; the table stays in pixels and frames.
+    units = ("pixel_size", "space_unit", "frame_interval", "time_unit")
+    args = _arguments(track_command, ["POINTS.csv", "--out", "tracks.csv"], options, "link", exclude=units)
     table = _columns(points, "points", ("frame", "x", "y"), integer=("frame",))
     said: list[str] = []
     with _python_names():
@@ -218,7 +220,8 @@ def render(source: PathLike, tracks: pd.DataFrame | PathLike | Tracks, out: Path
         ``frame`` (a .png's frame; default the tracks' last), ``trail`` (10 positions),
         ``labels`` (True), ``scale`` (1), ``crop`` ("x0,y0,x1,y1"), ``fps`` (the clip's),
         ``summary`` (a PNG of every whole trajectory), ``detections`` (a table or detections.csv:
-        those no track holds are crossed out), ``format`` (of a tracks file).
+        those no track holds are crossed out), ``format`` (of a tracks file), ``pixel_size``
+        and ``space_unit`` (a scale bar; a calibrated TIFF gives one by itself).
 
     Returns
     -------

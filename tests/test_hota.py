@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from frame_points import frames_of
 from trackeval.metrics import HOTA
 
 from seedtrack.tracking.hota import ALPHAS, hota
@@ -38,18 +39,7 @@ def _result(rng, truth_xy, noise, swaps, drop, false_tracks, late):
 def _trackeval(result, truth, tolerance):
     """TrackEval's HOTA on the per-frame ids and similarities, computed here independently."""
     gt_ids, tr_ids, similarity = [], [], []
-    start = min(result.first_frame, truth.first_frame)
-    stop = max(result.first_frame + result.n_frames, truth.first_frame + truth.n_frames)
-    for frame in range(start, stop):
-        def present(tracks):
-            column = frame - tracks.first_frame
-            if not 0 <= column < tracks.n_frames:
-                return np.zeros(0, int), np.zeros((0, 2))
-            rows = np.flatnonzero(tracks.present[:, column])
-            return rows, tracks.xy[rows, column]
-
-        g, a = present(truth)
-        t, b = present(result)
+    for _, (g, a), (t, b) in frames_of(result, truth):
         distance = np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1))
         gt_ids.append(g)
         tr_ids.append(t)
