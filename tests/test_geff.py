@@ -37,6 +37,11 @@ def test_geff_round_trip_through_the_geff_package(tmp_path):
     for name, values in _tracks().to_rows().items():
         np.testing.assert_array_equal(back.to_rows()[name], values, err_msg=name)
     assert read_calibration(tmp_path / "tracks.geff") == Calibration(0.5, "micrometer", 0.1, "second")
+    # The same tracks make the same bytes, file for file.
+    write_tracks(tmp_path / "again.geff", _tracks(), units=units)
+    files = sorted(p.relative_to(tmp_path / "tracks.geff") for p in (tmp_path / "tracks.geff").rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(tmp_path / "again.geff") for p in (tmp_path / "again.geff").rglob("*") if p.is_file())
+    assert all((tmp_path / "tracks.geff" / f).read_bytes() == (tmp_path / "again.geff" / f).read_bytes() for f in files)
 
 
 def test_geff_without_tracklets_is_read_as_the_graphs_unbranched_runs(tmp_path):
