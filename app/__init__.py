@@ -7,6 +7,9 @@ The four stages of ``seedtrack run`` as functions over pandas tables (see :mod:`
     scores = seedtrack.evaluate(tracks, truth)   # the scores `seedtrack evaluate` prints
     seedtrack.render("clip.mp4", tracks, "overlay.mp4")
 
+Each stage's options are also a settings object that checks itself (``seedtrack.DetectSettings``,
+``LinkSettings``, ``EvaluateSettings``, ``RenderSettings``; :mod:`seedtrack.settings`).
+
 The parts they are made of, importable by these names:
 
 - :mod:`seedtrack.detection`: ``clip`` (:class:`ClipDetector`, the once-per-clip decisions),
@@ -57,6 +60,10 @@ _LAZY = {
     "drift": "seedtrack.analysis",
     "velocity": "seedtrack.analysis",
     "Scores": "seedtrack.tracking.evaluation",
+    "DetectSettings": "seedtrack.pipeline",
+    "LinkSettings": "seedtrack.settings",
+    "EvaluateSettings": "seedtrack.settings",
+    "RenderSettings": "seedtrack.settings",
     "Tracks": "seedtrack.tracking.tracks",
     "GOAConfig": "seedtrack.tracking.goa",
     "LifecycleConfig": "seedtrack.tracking.lifecycle",
@@ -72,7 +79,7 @@ _LAZY = {
     "write_tracks": "seedtrack.data.trackfile",
     "DataError": "seedtrack.data.errors",
 }
-_SUBPACKAGES = ("api", "detection", "tracking", "data", "pipeline", "cli")
+_SUBPACKAGES = ("api", "settings", "detection", "tracking", "data", "pipeline", "cli")
 
 __all__ = [*_LAZY, *_SUBPACKAGES]
 

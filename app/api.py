@@ -2,23 +2,23 @@
 
 ``seedtrack.detect`` finds objects in frames, ``seedtrack.link`` links them into tracks,
 ``seedtrack.evaluate`` scores tracks against the truth and ``seedtrack.render`` draws them over
-the clip. Each takes the options of its command, by the same names with underscores
-(``--max-speed`` is ``max_speed=``) and with the same defaults, and calls the same functions as
-the command, so that both give the same answer. Tables hold the columns the command's CSV files
-hold: frames 0-based, positions in pixels, x to the right and y down, pixel centres at integer
-coordinates.
+the clip. Each takes the options of its command as keywords, by the same names with underscores
+(``--max-speed`` is ``max_speed=``) and with the same defaults; they make the stage's settings
+(:mod:`seedtrack.settings`, :class:`seedtrack.pipeline.DetectSettings`) and call the library
+functions the command calls, so that both give the same answer. Tables hold the columns the
+command's CSV files hold: frames 0-based, positions in pixels, x to the right and y down, pixel
+centres at integer coordinates.
 
-Errors: an option or a table that makes no sense is a ``ValueError`` (an unknown option a
-``TypeError``); a file that cannot be read is a :class:`seedtrack.data.errors.DataError` naming it.
+Errors: an option or a table that makes no sense is a ``ValueError`` (an option's an
+:class:`seedtrack.errors.OptionError` naming it); a file that cannot be read is a
+:class:`seedtrack.data.errors.DataError` naming it.
 """
 
 from __future__ import annotations
 
-import argparse
 import contextlib
-import itertools
+import dataclasses
 import os
-import re
 import warnings
 from pathlib import Path
 from typing import Iterable, Iterator
@@ -26,29 +26,45 @@ from typing import Iterable, Iterator
 import numpy as np
 import pandas as pd
 
-from seedtrack.data.csvio import TRACK_COLUMNS, read_table
+from seedtrack.data.csvio import read_table
 from seedtrack.data.errors import DataError
-from seedtrack.data.frames import read_mask
 from seedtrack.data.trackfile import read_tracks
-from seedtrack.detection.clip import ClipDetector, Detections, detect_frames, temporal_background
-from seedtrack.detection.roi import Circle
 from seedtrack.tracking.evaluation import Scores
 from seedtrack.tracking.tracks import Tracks
 
-from .commands import detect as detect_command
-from .commands import evaluate as evaluate_command
-from .commands import render as render_command
-from .commands import track as track_command
-from .errors import UsageError
-from .pipeline import DetectionSettings, detect_clip
-from .points import POINT_COLUMNS, group_points, point_rows
+from .pipeline import DetectSettings, detect_clip
+from .points import POINT_COLUMNS, group_points, link_points, track_rows
+from .rendering import draw, output_checked
+from .scoring import DEFAULT_TOLERANCE, assess
+from .settings import EvaluateSettings, LinkSettings, RenderSettings
 
 __all__ = ["detect", "link", "evaluate", "render", "Scores"]
 
 PathLike = str | os.PathLike
+_DETECT = DetectSettings()
+_LINK = LinkSettings()
+_RENDER = RenderSettings()
 
 
-def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
+def detect(
+    source: PathLike | Iterable[np.ndarray],
+    *,
+    detector: str = _DETECT.detector,
+    diameter: int | None = _DETECT.diameter,
+    min_mass: float | None = _DETECT.min_mass,
+    snr: float | None = _DETECT.snr,
+    polarity: str = _DETECT.polarity,
+    background: str = _DETECT.background,
+    background_size: float = _DETECT.background_size,
+    threshold: str | float = _DETECT.threshold,
+    min_area: float = _DETECT.min_area,
+    max_area: float | None = _DETECT.max_area,
+    roi=_DETECT.roi,
+    split: bool = _DETECT.split,
+    start: int = _DETECT.start,
+    end: int | None = _DETECT.end,
+    step: int = _DETECT.step,
+) -> pd.DataFrame:
     """Find objects in every frame, as ``seedtrack detect`` does.
 
     Parameters
@@ -59,14 +75,37 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
         read once, except with ``background="temporal"``, which keeps them in memory). A file
         is read at its own depth (:func:`seedtrack.data.frames.open_frames`), so it gives the
         detections of its frames as arrays.
-    **options
-        The options of ``seedtrack detect``: ``detector`` ("blob"), ``polarity`` ("auto",
-        decided on the first frame), ``background`` ("local"), ``background_size`` (40 px),
-        ``threshold`` ("otsu", "adaptive" or grey levels), ``min_area`` (4 px), ``max_area``
-        (1% of the frame), ``roi`` ("auto", "none", (x, y, r) in pixels, or a mask image file),
-        ``split`` (True), ``start`` (0), ``end`` (None: the end), ``step`` (1), ``diameter`` and
-        ``min_mass`` (the spot detector's diameter, pixels, and least mass, integrated brightness
-        in grey levels times pixels; None: set from the first frame).
+    detector : {"auto", "blob", "spot"}
+        Threshold blobs (seeds: dark, elongated, touching), Crocker-Grier spots (beads: small,
+        round, faint), or the one that suits the first frame.
+    diameter : int, optional
+        The spot detector's diameter, pixels, odd (default: measured on the first frame).
+    min_mass : float, optional
+        The spot detector's least mass, integrated brightness in grey levels times pixels
+        (default: set from the first frame's noise).
+    snr : float, optional
+        The spot detector's least mass as a multiple of the typical mass of the background's own
+        maxima (default: where the first frame's masses show objects apart from the background,
+        else from the noise; ``min_mass`` wins).
+    polarity : {"auto", "dark", "light"}
+        Objects darker or lighter than the background ("auto": decided on the first frame).
+    background : {"local", "none", "temporal"}
+        What contrast is measured against: a median over ``background_size`` windows, the
+        frame's median grey, or the per-pixel median over the clip.
+    background_size : float
+        Window of the local background, pixels.
+    threshold : "otsu", "adaptive" or float
+        Object pixels: Otsu's level, local mean + 3 local standard deviations, or a contrast of
+        at least this many grey levels.
+    min_area, max_area : float
+        Smallest and largest object, pixels (max_area None: 1% of the frame).
+    roi : "auto", "none", (x, y, r) or path-like
+        Where to look: the dish if the first frame shows one, everywhere, a circle in pixels,
+        or a mask image of the frames' size (nonzero inside).
+    split : bool
+        Split blobs of touching objects.
+    start, end, step : int
+        0-based frames processed: ``range(start, end, step)`` (end None: the end).
 
     Returns
     -------
@@ -90,20 +129,25 @@ def detect(source: PathLike | Iterable[np.ndarray], **options) -> pd.DataFrame:
     >>> list(points.columns)
     ['frame', 'x', 'y', 'area', 'mean_intensity', 'eccentricity']
     """
-    options = dict(options)
-    if "roi" in options:
-        options["roi"] = _roi_text(options["roi"])
-    args = _arguments(detect_command, ["INPUT", "--out", "detections.csv"], options, "detect", exclude=("preview", "preview_frame"))
-    with _python_names():
-        settings = detect_command.detection_settings(args)
-    if isinstance(source, (str, os.PathLike)):
-        detections = detect_clip(Path(source), settings, say=None).detections
-    else:
-        detections = _detect_arrays(source, settings)
-    return pd.DataFrame(detections.to_rows())
+    settings = _settings(DetectSettings, locals())
+    return pd.DataFrame(detect_clip(source, settings, say=None).detections.to_rows())
 
 
-def link(points: pd.DataFrame, **options) -> pd.DataFrame:
+def link(
+    points: pd.DataFrame,
+    *,
+    algorithm: str = _LINK.algorithm,
+    max_speed: float | None = _LINK.max_speed,
+    motion: str = _LINK.motion,
+    phi_max: float = _LINK.phi_max,
+    max_gap: int | None = _LINK.max_gap,
+    fixed_count: bool = _LINK.fixed_count,
+    min_length: int = _LINK.min_length,
+    individual_model: str | None = _LINK.individual_model,
+    combined_model: str | None = _LINK.combined_model,
+    min_speed: float | None = _LINK.min_speed,
+    first_links: str | PathLike | None = _LINK.first_links,
+) -> pd.DataFrame:
     """Link points into tracks, as ``seedtrack track`` does.
 
     Parameters
@@ -112,11 +156,29 @@ def link(points: pd.DataFrame, **options) -> pd.DataFrame:
         Columns ``frame`` (0-based, whole numbers), ``x``, ``y`` (pixels), any others; row order
         does not matter. Frame numbers all N apart are consecutive measurements (speeds per N
         frames), as in the command.
-    **options
-        The options of ``seedtrack track``: ``algorithm`` ("goa-updown"), ``max_speed`` (None,
-        pixels/frame), ``motion`` ("auto", "smooth" or "random"), ``phi_max`` (0.1),
-        ``max_gap`` (10 frames), ``fixed_count`` (False), ``min_length`` (0 frames),
-        ``individual_model``, ``combined_model``, ``min_speed``, ``first_links``.
+    algorithm : str
+        "goa-updown" (tracks open and end anywhere), "goa-updown-fixed" (the paper's fixed count
+        of tracks), "goa" (one forward pass), or a comparison tracker "nn", "ss", "rs", "ipan".
+    max_speed : float, optional
+        Largest speed, pixels/frame (default: twice the fastest measured on a first pass).
+    motion : {"auto", "smooth", "random"}
+        Measure how the points move on a first pass, or say it.
+    phi_max : float
+        Largest smoothness cost of a link (0..1.1), also the cost of a missed point.
+    max_gap : int, optional
+        A track ends after this many missed frames in a row (default 10); gaps up to it are
+        filled by interpolation.
+    fixed_count : bool
+        GOA-updown as published: one track per point of the first frame.
+    min_length : int
+        Keep only tracks spanning at least this many frames, gaps included.
+    individual_model, combined_model : str, optional
+        "im1", "im2", "im3"; "cm1", "cm2" (default: fitted to the motion; cm1).
+    min_speed : float, optional
+        Smallest speed, pixels/frame.
+    first_links : str or path-like, optional
+        How tracks start: "lookahead" (default), "nearest", "paper", or (algorithm "goa") a
+        tracks file giving the first two frames' links.
 
     Returns
     -------
@@ -145,26 +207,26 @@ def link(points: pd.DataFrame, **options) -> pd.DataFrame:
     >>> tracks[tracks.interpolated == 1][["frame", "x", "y"]].values.tolist()
     [[3.0, 19.0, 50.0]]
     """
-    # The units only change the file the command writes; the table stays in pixels and frames.
-    units = ("pixel_size", "space_unit", "frame_interval", "time_unit")
-    args = _arguments(track_command, ["POINTS.csv", "--out", "tracks.csv"], options, "link", exclude=units)
-    table = _columns(points, "points", ("frame", "x", "y"), integer=("frame",))
+    settings = _settings(LinkSettings, locals())
+    table = _columns(points, "points", POINT_COLUMNS, integer=("frame",))
+    table.update({name: points[name].to_numpy() for name in points.columns if name not in table})
     said: list[str] = []
-    with _python_names():
-        track_command.check_options(args)
+    with _in_memory_errors():
         grouped = group_points(table, "points")
-        tracks = track_command.track_points(grouped, args, say=said.append)
-    rows, source = point_rows(grouped, tracks)
-    result = pd.DataFrame(rows)
-    kept = points.drop(columns=[name for name in (*POINT_COLUMNS, *TRACK_COLUMNS) if name in points.columns])
-    if len(kept.columns):
-        # Row -1 is in no index: reindexing gives the missing values of an interpolated row.
-        result = pd.concat([result, kept.reset_index(drop=True).reindex(source).reset_index(drop=True)], axis=1)
+        tracks = link_points(grouped, settings, say=said.append)
+    result = pd.DataFrame(track_rows(grouped, tracks, blank=None))
     result.attrs["motion"] = "\n".join(said)
     return result
 
 
-def evaluate(tracks: pd.DataFrame | PathLike | Tracks, truth: pd.DataFrame | PathLike | Tracks, tol: float = 3.0) -> Scores:
+def evaluate(
+    tracks: pd.DataFrame | PathLike | Tracks,
+    truth: pd.DataFrame | PathLike | Tracks,
+    *,
+    tol: float = DEFAULT_TOLERANCE,
+    format: str | None = None,
+    truth_format: str | None = None,
+) -> Scores:
     """Score tracks against ground truth, as ``seedtrack evaluate`` does.
 
     Parameters
@@ -174,7 +236,10 @@ def evaluate(tracks: pd.DataFrame | PathLike | Tracks, truth: pd.DataFrame | Pat
         optionally ``interpolated``; or files in any format the command reads (our csv, trackpy
         csv, MOT txt, TrackMate or ISBI xml).
     tol : float
-        Matching distance, pixels (the command's ``--tol``).
+        Matching distance, pixels.
+    format, truth_format : str, optional
+        Formats of the files (csv, trackpy, mot, trackmate, isbi; default: from the extension
+        and contents).
 
     Returns
     -------
@@ -193,17 +258,34 @@ def evaluate(tracks: pd.DataFrame | PathLike | Tracks, truth: pd.DataFrame | Pat
     >>> scores.correct_tracks, scores.id_switches
     (0, 2)
     """
-    with _python_names():
-        evaluate_command.check_tolerance(tol)
-        result, result_name = _tracks(tracks, "tracks")
-        true, truth_name = _tracks(truth, "truth")
-        scores, _, _, hint = evaluate_command.assess(result, true, tol, truth_name)
+    settings = _settings(EvaluateSettings, locals())
+    with _in_memory_errors():
+        result, _ = _tracks(tracks, "tracks", settings.format)
+        true, truth_name = _tracks(truth, "truth", settings.truth_format)
+        scores, _, _, hint = assess(result, true, settings.tol, truth_name)
     if hint is not None:
         warnings.warn(hint, stacklevel=2)
     return scores
 
 
-def render(source: PathLike, tracks: pd.DataFrame | PathLike | Tracks, out: PathLike | None, **options) -> str:
+def render(
+    source: PathLike,
+    tracks: pd.DataFrame | PathLike | Tracks,
+    out: PathLike | None = None,
+    *,
+    start: int = _RENDER.start,
+    end: int | None = _RENDER.end,
+    step: int = _RENDER.step,
+    frame: int | None = _RENDER.frame,
+    trail: int = _RENDER.trail,
+    labels: bool = _RENDER.labels,
+    scale: float = _RENDER.scale,
+    crop: str | None = _RENDER.crop,
+    fps: float | None = _RENDER.fps,
+    summary: PathLike | None = None,
+    detections: pd.DataFrame | PathLike | None = None,
+    format: str | None = None,
+) -> str:
     """Draw tracks over a clip, as ``seedtrack render`` does.
 
     Parameters
@@ -215,13 +297,26 @@ def render(source: PathLike, tracks: pd.DataFrame | PathLike | Tracks, out: Path
     out : path-like or None
         ``.mp4``, ``.gif``, ``.png`` (one frame, see ``frame``) or a folder (one PNG per frame);
         None with ``summary`` only.
-    **options
-        The options of ``seedtrack render``: ``start`` (0), ``end`` (None), ``step`` (1),
-        ``frame`` (a .png's frame; default the tracks' last), ``trail`` (10 positions),
-        ``labels`` (True), ``scale`` (1), ``crop`` ("x0,y0,x1,y1"), ``fps`` (the clip's),
-        ``summary`` (a PNG of every whole trajectory), ``detections`` (a table or detections.csv:
-        those no track holds are crossed out), ``format`` (of a tracks file), ``pixel_size``
-        and ``space_unit`` (a scale bar; a calibrated TIFF gives one by itself).
+    start, end, step : int
+        0-based frames drawn: ``range(start, end, step)`` (end None: the end of the clip).
+    frame : int, optional
+        The frame a .png shows (default: the tracks' last).
+    trail : int
+        Past positions in each fading trail.
+    labels : bool
+        Write each track's id beside it.
+    scale : float
+        Enlarge (or shrink, below 1) the frames.
+    crop : str, optional
+        "x0,y0,x1,y1": draw only this box of the frame, pixels (x1, y1 exclusive).
+    fps : float, optional
+        Frames per second of the output (default: the clip's).
+    summary : path-like, optional
+        Also draw every whole trajectory over the first frame into this PNG.
+    detections : DataFrame or path-like, optional
+        A table or detections.csv (frame, x, y): those no track holds are crossed out.
+    format : str, optional
+        Format of a tracks file (default: from the extension and contents).
 
     Returns
     -------
@@ -238,106 +333,33 @@ def render(source: PathLike, tracks: pd.DataFrame | PathLike | Tracks, out: Path
     >>> print(seedtrack.render(folder / "clip.mp4", tracks, folder / "last.png"))  # doctest: +ELLIPSIS
     wrote .../last.png: 1 frame of 12 tracks, 240x180
     """
-    options = dict(options)
-    if options.get("summary") is not None:
-        options["summary"] = Path(options["summary"])
-    detections = options.pop("detections", None)
-    args = _arguments(render_command, ["INPUT", "TRACKS"], options, "render", exclude=("out",))
-    args.input = Path(source)
-    args.out = None if out is None else str(out)
-    with _python_names():
-        kind = render_command.check_view_options(args)
-        drawn, args.tracks = _tracks(tracks, "tracks")
-        rows = None
-        if detections is not None:
-            if isinstance(detections, (str, os.PathLike)):
-                rows = read_table(detections, required=("frame", "x", "y"))
-            else:
-                rows = _columns(detections, "detections", ("frame", "x", "y"), integer=("frame",))
-        return render_command.draw(args, kind, drawn, rows)
+    settings = _settings(RenderSettings, locals())
+    with _in_memory_errors():
+        kind = output_checked(None if out is None else str(out), settings, None if summary is None else Path(summary))
+        drawn, name = _tracks(tracks, "tracks", format)
+        rows, rows_name = None, "detections"
+        if isinstance(detections, (str, os.PathLike)):
+            rows, rows_name = read_table(detections, required=("frame", "x", "y")), Path(detections)
+        elif detections is not None:
+            rows = _columns(detections, "detections", ("frame", "x", "y"), integer=("frame",))
+        return draw(Path(source), drawn, name, None if out is None else str(out), kind, settings, None if summary is None else Path(summary), rows, rows_name)
 
 
-def _arguments(command, placeholders: list[str], options: dict, caller: str, exclude: tuple[str, ...] = ()) -> argparse.Namespace:
-    """The command's arguments with its defaults, as its own parser makes them, updated with
-    ``options``; the placeholders fill its required arguments, which are not options here.
-
-    Raises
-    ------
-    TypeError
-        If an option is not one of the command's.
-    """
-    parser = argparse.ArgumentParser(prog="seedtrack")
-    subparsers = parser.add_subparsers()
-    command.add_parser(subparsers)
-    (sub,) = subparsers.choices.values()
-    args = sub.parse_args(placeholders)
-    fixed = {action.dest for action in sub._actions if action.required or not action.option_strings}
-    allowed = sorted(set(vars(args)) - fixed - {"run", *exclude})
-    unknown = sorted(set(options) - set(allowed))
-    if unknown:
-        raise TypeError(f"{caller}() got unexpected keyword argument(s) {', '.join(unknown)}; its options are {', '.join(allowed)}")
-    for name, value in options.items():
-        setattr(args, name, value)
-    return args
+def _settings(kind: type, given: dict):
+    """``kind``, a settings dataclass, made of a function's keywords (its ``locals()`` on entry:
+    the inputs, which it does not hold, are left out)."""
+    return kind(**{f.name: given[f.name] for f in dataclasses.fields(kind) if f.init})
 
 
 @contextlib.contextmanager
-def _python_names() -> Iterator[None]:
-    """Report a command's usage error as a ValueError naming keywords (``--max-speed`` is
-    ``max_speed``), and a problem of a table given in memory (not a file) as a ValueError."""
+def _in_memory_errors() -> Iterator[None]:
+    """Report a problem of a table given in memory (not a file) as a ValueError."""
     try:
         yield
-    except UsageError as error:
-        raise ValueError(re.sub(r"--(?:no-)?([a-z][a-z-]*)", lambda m: m.group(1).replace("-", "_"), str(error))) from None
     except DataError as error:
         if isinstance(error.path, Path):
             raise
         raise ValueError(str(error)) from None
-
-
-def _roi_text(roi) -> str:
-    """The ``--roi`` text of a region given as a circle, a tuple (x, y, r) or a path."""
-    if isinstance(roi, Circle):
-        roi = (roi.x, roi.y, roi.r)
-    if isinstance(roi, (tuple, list)) and len(roi) == 3:
-        return ",".join(repr(float(v)) for v in roi)
-    return str(roi) if isinstance(roi, os.PathLike) else roi
-
-
-# Frame data the detectors take: 8 or 16 bits, or float (their range read from the first frame).
-_FRAME_TYPES = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32), np.dtype(np.float64))
-
-
-def _detect_arrays(source: Iterable[np.ndarray], settings: DetectionSettings) -> Detections:
-    """:func:`seedtrack.pipeline.detect_clip` on frames in memory."""
-    selected = itertools.islice(enumerate(source), settings.start, settings.end, settings.step)
-    shape: list[tuple[int, ...]] = []
-
-    def checked_frames() -> Iterator[tuple[int, np.ndarray]]:
-        for index, image in selected:
-            image = np.asarray(image)
-            if image.dtype not in _FRAME_TYPES or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
-                raise ValueError(
-                    f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, uint16 or float, got {image.dtype} of shape {image.shape}"
-                )
-            if shape and image.shape[:2] != shape[0]:
-                raise ValueError(f"frame {index} is {image.shape[1]}x{image.shape[0]}, the first {shape[0][1]}x{shape[0][0]}")
-            shape[:] = [image.shape[:2]]
-            yield index, image
-
-    checked = checked_frames()
-    first = next(checked, None)
-    if first is None:
-        raise ValueError("no frame to detect in (after start, end and step)")
-    frames = itertools.chain([first], checked)
-    background = None
-    if settings.options.background == "temporal":
-        frames = list(frames)
-        background = temporal_background([image for _, image in frames])
-    roi = settings.roi
-    if isinstance(roi, Path):
-        roi = read_mask(roi, (first[1].shape[1], first[1].shape[0]))
-    return detect_frames(frames, ClipDetector(settings.options, settings.detector, roi, background, settings.diameter, settings.min_mass))
 
 
 def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer: tuple[str, ...]) -> dict[str, np.ndarray]:
@@ -360,12 +382,13 @@ def _columns(table: pd.DataFrame, name: str, required: tuple[str, ...], integer:
     return out
 
 
-def _tracks(tracks: pd.DataFrame | PathLike | Tracks, name: str) -> tuple[Tracks, object]:
-    """A track set and what to call it in errors: a file read, a table converted, or as given."""
+def _tracks(tracks: pd.DataFrame | PathLike | Tracks, name: str, format: str | None = None) -> tuple[Tracks, object]:
+    """A track set and what to call it in errors: a file read (in ``format``, if given), a table
+    converted, or as given."""
     if isinstance(tracks, Tracks):
         return tracks, name
     if isinstance(tracks, (str, os.PathLike)):
-        return read_tracks(tracks), Path(tracks)
+        return read_tracks(tracks, format), Path(tracks)
     if isinstance(tracks, pd.DataFrame) and "track_id" not in tracks.columns and "particle" in tracks.columns:
         tracks = tracks.rename(columns={"particle": "track_id"})
     columns = _columns(tracks, name, ("track_id", "frame", "x", "y"), integer=("track_id", "frame"))

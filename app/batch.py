@@ -28,7 +28,7 @@ from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError
 
 from .errors import UsageError
-from .pipeline import DetectionSettings, run_pipeline
+from .pipeline import DetectSettings, run_pipeline
 from .points import TrackingSettings
 
 STATUSES = ("done", "failed", "skipped")
@@ -42,11 +42,11 @@ class RunOptions:
 
     Attributes
     ----------
-    detection : DetectionSettings
+    detection : DetectSettings
     tracking : TrackingSettings
     """
 
-    detection: DetectionSettings = DetectionSettings()
+    detection: DetectSettings = DetectSettings()
     tracking: TrackingSettings = TrackingSettings()
 
     def fingerprint(self) -> str:

@@ -23,7 +23,7 @@ from typing import Sequence
 
 from seedtrack.data.errors import DataError, DataWarning
 
-from .errors import UsageError
+from .errors import OptionError, UsageError, in_option_names
 from .processes import default_workers, start_fork_server
 
 # Command name -> the line ``seedtrack --help`` lists it with, in the order listed.
@@ -121,6 +121,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return args.run(args)
     except (DataError, UsageError) as error:
         return _fail(prefix, str(error))
+    except OptionError as error:
+        return _fail(prefix, in_option_names(str(error), error.names))
     except KeyboardInterrupt:
         print(f"{prefix}: interrupted; files already written are complete", file=sys.stderr)
         return EXIT_INTERRUPTED

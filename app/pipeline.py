@@ -10,14 +10,18 @@ clip's length does not bound what can be processed.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib
 import itertools
+import math
+import os
+import re
 import sys
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -25,16 +29,16 @@ from seedtrack.data.atomic import output_folder
 from seedtrack.data.csvio import write_table
 from seedtrack.data.errors import DataError, warn
 from seedtrack.data.depth import to_bgr8
-from seedtrack.data.frames import FrameSource, open_frames, read_mask
+from seedtrack.data.frames import IMAGE_SUFFIXES, FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
-from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames, grey_levels
+from seedtrack.detection.clip import BACKGROUND_FRAMES, DETECTORS, ClipDetector, Detections, background_spacing, detect_frames, grey_levels, temporal_background
 from seedtrack.detection.roi import Circle, circle_mask
 from seedtrack.tracking.tracks import Tracks
 
-from .errors import UsageError
+from .errors import OptionError, UsageError
 from .points import TrackingSettings, group_points, track_frames
 from .parallel import VideoEncoder, read_ahead, threaded_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
@@ -42,7 +46,7 @@ from .progress import progress_bar
 from .wording import counted
 
 __all__ = [
-    "DETECTORS", "Detections", "DetectionSettings", "ClipDetections",
+    "DETECTORS", "Detections", "DetectSettings", "ClipDetections",
     "detect_clip", "render_overlay", "run_pipeline",
 ]
 
@@ -54,38 +58,141 @@ TRAIL = 10
 _READ_AHEAD_BYTES = 64 * 2**20
 
 
+_BLOB = BlobOptions()
+_CIRCLE = re.compile(r"^\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*$")
+# BlobOptions' fields by the names of the options that set them.
+_BLOB_FIELDS = {"min_area_px": "min_area", "max_area_px": "max_area"}
+
+
 @dataclass(frozen=True)
-class DetectionSettings:
-    """What the detector is asked to do on a clip.
+class DetectSettings:
+    """What the detector is asked to do on a clip: the options of ``seedtrack detect``.
 
     Attributes
     ----------
-    options : BlobOptions
-        Polarity ("auto" is decided once, on the first frame), background, threshold, areas.
     detector : {"auto", "blob", "spot"}
         Threshold blobs (:func:`seedtrack.detection.blobs.detect_blobs`), Crocker-Grier spots
-        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame
-        (:func:`seedtrack.detection.choice.choose_detector`).
+        (:func:`seedtrack.detection.spots.detect_spots`), or the one that suits the first frame.
     diameter : int or None
-        Spot diameter, pixels, odd; None measures it on the first frame.
-    roi : "auto", "none", Circle or Path
-        Region of interest: the dish found on the first frame (whole frame if there is none
-        clearly), the whole frame, a circle in pixels, or a mask image of the frames' size.
+        Spot diameter, pixels, odd, >= 3; None measures it on the first frame.
+    min_mass : float or None
+        The spot detector's least mass (integrated brightness, grey levels times pixels); None
+        sets it from the first frame's noise.
+    snr : float or None
+        The spot detector's signal-to-background ratio: the least mass is this many times the
+        typical mass of the background's own maxima; None decides from the first frame.
+    polarity, background, background_size, threshold, split
+        As :class:`seedtrack.detection.blobs.BlobOptions` takes them; ``threshold`` may also be
+        the text of a number.
+    min_area, max_area : float or None
+        Smallest and largest object, pixels (max_area None: 1% of the frame).
+    roi : "auto", "none", Circle, (x, y, r), "X,Y,R", or path of a mask image
+        Where to look; held as "auto", "none", a :class:`Circle` or a :class:`~pathlib.Path`.
     start, end, step : int
         0-based frames processed: ``range(start, end, step)``, end None for the clip's end.
-    min_mass : float or None
-        The spot detector's least mass (integrated brightness, data units times pixels, as the
-        ``detector:`` line prints it); None sets it from the first frame's noise.
+    options : BlobOptions
+        Made from the blob detector's settings (not an argument).
+
+    Raises
+    ------
+    OptionError
+        Naming the option that makes no sense.
+
+    Examples
+    --------
+    >>> DetectSettings(threshold="25", roi="160,120,90").roi
+    Circle(x=160.0, y=120.0, r=90.0)
+    >>> DetectSettings(diameter=4)
+    Traceback (most recent call last):
+    ...
+    seedtrack.errors.OptionError: diameter must be an odd number of pixels >= 3, got 4
     """
 
-    options: BlobOptions = BlobOptions()
     detector: str = "auto"
     diameter: int | None = None
+    min_mass: float | None = None
+    snr: float | None = None
+    polarity: str = _BLOB.polarity
+    background: str = _BLOB.background
+    background_size: float = _BLOB.background_size
+    threshold: str | float = _BLOB.threshold
+    min_area: float = _BLOB.min_area_px
+    max_area: float | None = None
     roi: str | Circle | Path = "auto"
+    split: bool = _BLOB.split
     start: int = 0
     end: int | None = None
     step: int = 1
-    min_mass: float | None = None
+    options: BlobOptions = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.detector not in DETECTORS:
+            raise OptionError(f"detector must be one of {', '.join(DETECTORS)}, got {self.detector!r}", "detector")
+        threshold = self.threshold
+        if threshold not in ("otsu", "adaptive"):
+            try:
+                threshold = float(threshold)
+            except (TypeError, ValueError):
+                raise OptionError(f"threshold must be otsu, adaptive or a number of grey levels, got {self.threshold!r}", "threshold") from None
+        if threshold == "adaptive" and self.detector == "spot":
+            raise OptionError("threshold adaptive works with detector blob only", "threshold", "detector")
+        if self.diameter is not None and (self.diameter < 3 or self.diameter % 2 == 0):
+            raise OptionError(f"diameter must be an odd number of pixels >= 3, got {self.diameter}", "diameter")
+        if self.min_mass is not None and not (math.isfinite(self.min_mass) and self.min_mass >= 0):
+            raise OptionError(f"min_mass must be a finite number >= 0, got {self.min_mass:g}", "min_mass")
+        if self.snr is not None and not (math.isfinite(self.snr) and self.snr > 0):
+            raise OptionError(f"snr must be a finite number > 0, got {self.snr:g}", "snr")
+        try:
+            options = BlobOptions(
+                polarity=self.polarity,
+                background=self.background,
+                background_size=self.background_size,
+                threshold=threshold,
+                min_area_px=self.min_area,
+                max_area_px=self.max_area,
+                split=self.split,
+            )
+        except ValueError as error:
+            message = re.sub(r"^bad \w+: ", "", str(error))
+            for blob_name, name in _BLOB_FIELDS.items():
+                message = re.sub(rf"\b{blob_name}\b", name, message)
+            raise OptionError(message, *(_BLOB_FIELDS.get(f.name, f.name) for f in dataclasses.fields(BlobOptions))) from None
+        object.__setattr__(self, "options", options)
+        object.__setattr__(self, "threshold", threshold)
+        for name in ("start", "end", "step"):
+            value = getattr(self, name)
+            if value is not None and value < (1 if name == "step" else 0):
+                raise OptionError(f"{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}", name)
+        if self.end is not None and self.end <= self.start:
+            raise OptionError(f"end ({self.end}) must come after start ({self.start})", "end", "start")
+        object.__setattr__(self, "roi", _roi(self.roi))
+
+
+def _roi(roi) -> str | Circle | Path:
+    """The region of interest as :class:`DetectSettings` holds it."""
+    if isinstance(roi, (tuple, list)) and len(roi) == 3:
+        roi = Circle(*(float(value) for value in roi))
+    if isinstance(roi, Circle):
+        if not all(math.isfinite(value) for value in (roi.x, roi.y, roi.r)) or roi.r <= 0:
+            raise OptionError(f"roi circle needs finite X,Y and a radius > 0, got {roi.x:g},{roi.y:g},{roi.r:g}", "roi")
+        return roi
+    if isinstance(roi, os.PathLike):
+        roi = os.fspath(roi)
+    if not isinstance(roi, str):
+        raise OptionError(f"roi takes auto, none, a circle (x, y, r) in pixels, or a mask image file; got {roi!r}", "roi")
+    if roi in ("auto", "none"):
+        return roi
+    circle = _CIRCLE.match(roi)
+    if circle:
+        x, y, r = (float(value) for value in circle.groups())
+        if not all(math.isfinite(value) for value in (x, y, r)) or r <= 0:
+            raise OptionError(f"roi circle needs finite X,Y and a radius > 0, got {roi!r}", "roi")
+        return Circle(x, y, r)
+    if not Path(roi).is_file():
+        if Path(roi).suffix.lower() in IMAGE_SUFFIXES or "/" in roi or os.sep in roi:
+            raise OptionError(f"roi {roi}: no such mask image file", "roi")
+        raise OptionError(f"roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; {roi!r} is none of these", "roi")
+    return Path(roi)
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,8 +202,8 @@ class ClipDetections:
     Attributes
     ----------
     detections : Detections
-    fps : float
-        The clip's frame rate, frames per second.
+    fps : float or None
+        The clip's frame rate, frames per second (None for frames in memory).
     roi : ndarray of uint8, shape (H, W), or None
         The region of interest used (255 inside), None for the whole frame.
     circle : Circle or None
@@ -116,8 +223,8 @@ class ClipDetections:
 
 
 def detect_clip(
-    path: Path,
-    settings: DetectionSettings = DetectionSettings(), preview_frame: int | None = None,
+    path: Path | Iterable[np.ndarray],
+    settings: DetectSettings = DetectSettings(), preview_frame: int | None = None,
     say: Callable[[str], None] | None = print,
     workers: int = 1,
 ) -> ClipDetections:
@@ -132,9 +239,11 @@ def detect_clip(
 
     Parameters
     ----------
-    path : Path
-        Video, image folder, glob pattern or TIFF stack.
-    settings : DetectionSettings
+    path : Path or iterable of ndarray
+        Video, image folder, glob pattern or TIFF stack; or frames in memory, each an (H, W)
+        grey or (H, W, 3) BGR array of uint8, uint16 or float, read once (kept in memory with
+        the temporal background).
+    settings : DetectSettings
     preview_frame : int, optional
         0-based index of a processed frame to keep as :attr:`ClipDetections.preview`.
     workers : int
@@ -148,16 +257,23 @@ def detect_clip(
         be read.
     UsageError
         If the preview frame is not among the processed frames.
+    ValueError
+        If a frame in memory is not an image, or of another size than the first, or there is
+        none.
     """
-    with open_frames(path, start=settings.start, end=settings.end, step=settings.step) as source:
+    on_file = isinstance(path, (str, os.PathLike))
+    opened = open_frames(path, start=settings.start, end=settings.end, step=settings.step) if on_file else _FramesInMemory(path, settings)
+    with opened as source:
         last = settings.start + settings.step * source.frame_count if source.frame_count is not None else settings.end
         processed = range(settings.start, last if last is not None else sys.maxsize, settings.step)
         if preview_frame is not None and preview_frame not in processed:
             step = f" every {settings.step}" if settings.step > 1 else ""
             span = f"{processed.start}..{processed[-1]}{step}" if len(processed) else "none"
             raise UsageError(f"preview frame {preview_frame} is not among the frames processed ({span})")
-        background = _temporal_background(path, settings, source) if settings.options.background == "temporal" else None
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass)
+        background = None
+        if settings.options.background == "temporal":
+            background = _temporal_background(path, settings, source) if on_file else source.background()
+        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass, settings.snr)
         preview = None
 
         def decoded():
@@ -190,9 +306,61 @@ def detect_clip(
             raise DataError(path, source.stopped_early or "no frame could be read")
         if say is not None:
             say(f"detector: {detector.choice.reason}{_unused_options(settings, detector.choice)}")
+        if detector.choice.spots is not None and detector.choice.spots.unusual:
+            warn(str(path), detector.choice.spots.unusual)
         if source.stopped_early:
             print(f"seedtrack: {path}: {source.stopped_early}; keeping the {counted(detections.frame_indices.size, 'frame')} before it", file=sys.stderr)
         return ClipDetections(detections, source.fps, detector.roi, detector.circle, preview, detector.choice)
+
+
+# Frame data the detectors take: 8 or 16 bits, or float (their range read from the first frame).
+_FRAME_TYPES = (np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32), np.dtype(np.float64))
+
+
+class _FramesInMemory:
+    """Frames given as arrays, selected and read as :func:`seedtrack.data.frames.open_frames`
+    reads a clip (no frame rate, length or range known beforehand)."""
+
+    fps = None
+    frame_count = None
+    span = None
+    stopped_early = None
+
+    def __init__(self, frames: Iterable[np.ndarray], settings: DetectSettings) -> None:
+        self._checked = self._check(itertools.islice(enumerate(frames), settings.start, settings.end, settings.step))
+        first = next(self._checked, None)
+        if first is None:
+            raise ValueError("no frame to detect in (after start, end and step)")
+        self.size = (first[1].shape[1], first[1].shape[0])
+        self._frames = itertools.chain([first], self._checked)
+        if settings.options.background == "temporal":
+            self._frames = list(self._frames)
+
+    def _check(self, selected: Iterator[tuple[int, np.ndarray]]) -> Iterator[tuple[int, np.ndarray]]:
+        shape = None
+        for index, image in selected:
+            image = np.asarray(image)
+            if image.dtype not in _FRAME_TYPES or not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+                raise ValueError(
+                    f"frame {index} must be an (H, W) or (H, W, 3) array of uint8, uint16 or float, got {image.dtype} of shape {image.shape}"
+                )
+            if shape is not None and image.shape[:2] != shape:
+                raise ValueError(f"frame {index} is {image.shape[1]}x{image.shape[0]}, the first {shape[1]}x{shape[0]}")
+            shape = image.shape[:2]
+            yield index, image
+
+    def background(self) -> np.ndarray:
+        """:func:`seedtrack.detection.clip.temporal_background` of the frames selected."""
+        return temporal_background([image for _, image in self._frames])
+
+    def __iter__(self) -> Iterator[tuple[int, np.ndarray]]:
+        return iter(self._frames)
+
+    def __enter__(self) -> "_FramesInMemory":
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        pass
 
 
 def _frames_ahead(frame_bytes: int) -> int:
@@ -200,12 +368,13 @@ def _frames_ahead(frame_bytes: int) -> int:
     return int(np.clip(_READ_AHEAD_BYTES // max(frame_bytes, 1), 4, 64))
 
 
-def _unused_options(settings: DetectionSettings, choice: DetectorChoice) -> str:
+def _unused_options(settings: DetectSettings, choice: DetectorChoice) -> str:
     """What to add to the ``detector:`` line when options were given for the detector that did
     not run, so that they are never ignored silently ("" when there are none)."""
     defaults = BlobOptions()
     if choice.spots is None:
-        return "; --min-mass applies to the spot detector only (not used)" if settings.min_mass is not None else ""
+        given = [option for option, value in (("--min-mass", settings.min_mass), ("--snr", settings.snr)) if value is not None]
+        return f"; {', '.join(given)} {'apply' if len(given) > 1 else 'applies'} to the spot detector only (not used)" if given else ""
     given = settings.options
     unused = [
         option
@@ -230,7 +399,7 @@ def _given_roi(roi: str | Circle | Path, size: tuple[int, int]) -> str | Circle 
     return read_mask(roi, size) if isinstance(roi, Path) else roi
 
 
-def _temporal_background(path: Path, settings: DetectionSettings, source: FrameSource) -> np.ndarray:
+def _temporal_background(path: Path, settings: DetectSettings, source: FrameSource) -> np.ndarray:
     """Per-pixel median of up to 64 frames spread evenly over the processed range (as
     :func:`seedtrack.detection.clip.temporal_background` takes them from frames in memory)."""
     spread = settings.step * background_spacing(source.frame_count)
@@ -254,7 +423,7 @@ def render_overlay(
     out: Path,
     fps: float,
     trail: int = TRAIL,
-    selection: DetectionSettings | None = None,
+    selection: DetectSettings | None = None,
     workers: int = 1,
 ) -> None:
     """Write an H.264 clip of the input with the tracks drawn over it (see :mod:`seedtrack.drawing`),
@@ -268,7 +437,7 @@ def render_overlay(
         _render(path, tracks, detections, encoder, trail, selection, workers)
 
 
-def _render(path: Path, tracks: Tracks, detections: Detections, encoder: VideoEncoder, trail: int, selection: DetectionSettings | None, workers: int) -> None:
+def _render(path: Path, tracks: Tracks, detections: Detections, encoder: VideoEncoder, trail: int, selection: DetectSettings | None, workers: int) -> None:
     """:func:`render_overlay` into an encoder already started."""
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
@@ -289,10 +458,13 @@ def _annotate_pair(frame: tuple[int, np.ndarray], span: tuple[float, float], **o
     return annotate(to_bgr8(image, span), index, **options)
 
 
-def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
+def run_pipeline(
+    clip: Path, out: Path, detection: DetectSettings = DetectSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1, verbose: bool = False
+) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
+    Detection is :func:`detect_clip`, tracking :func:`track_frames` (``verbose``: the motion in
+    detail). Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking; the files are the same for any number.
 
@@ -311,7 +483,7 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
         with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
-            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
+            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
             write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
     return detections, tracks

@@ -6,12 +6,13 @@ code (:mod:`seedtrack.pipeline` re-exports these names).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from seedtrack.data.csvio import TRACK_COLUMNS
+from seedtrack.data.csvio import TRACK_COLUMNS, read_table
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig, drop_short
@@ -20,8 +21,12 @@ from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import Tracks
 
 from .progress import progress_bar
+from .wording import motion_lines
 
-__all__ = ["POINT_COLUMNS", "Points", "TrackingSettings", "group_points", "point_rows", "track_frames"]
+if TYPE_CHECKING:
+    from .settings import LinkSettings
+
+__all__ = ["POINT_COLUMNS", "Points", "TrackingSettings", "group_points", "point_rows", "track_rows", "track_frames", "link_points", "given_first_links"]
 
 POINT_COLUMNS = ("frame", "x", "y")
 
@@ -136,6 +141,32 @@ def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], n
     return rows, source
 
 
+def track_rows(points: Points, tracks: Tracks, blank: object = "") -> dict[str, np.ndarray]:
+    """The columns of tracks.csv: the track columns (:func:`point_rows`), then the input's other
+    columns, on a measured row the values of the point it holds and on an interpolated row
+    ``blank``; ``blank`` None is NaN, as a table with missing values holds it (whole numbers
+    become floats, other values objects, unless no row is interpolated).
+
+    Examples
+    --------
+    >>> table = {"frame": np.array([0, 0, 2, 2]), "x": np.array([0.0, 9.0, 2.0, 11.0]), "y": np.zeros(4), "id": np.array([5, 6, 7, 8])}
+    >>> points = group_points(table, "points")
+    >>> rows = track_rows(points, track_frames(points.frames, TrackingSettings(algorithm="nn"), say=None))
+    >>> rows["id"].tolist()
+    [5, 7, 6, 8]
+    """
+    rows, source = point_rows(points, tracks)
+    measured = source >= 0
+    for name, values in points.kept.items():
+        if blank is None and measured.all():
+            rows[name] = values[source]
+            continue
+        out = np.full(source.size, np.nan if blank is None else blank, dtype=float if blank is None and values.dtype.kind in "iuf" else object)
+        out[measured] = values[source[measured]]
+        rows[name] = out
+    return rows
+
+
 @dataclass(frozen=True)
 class TrackingSettings:
     """What the tracker is asked to do: the options of ``seedtrack track`` (and of ``run``).
@@ -169,20 +200,24 @@ class TrackingSettings:
 
 
 def track_frames(
-    frames: list[np.ndarray], settings: TrackingSettings = TrackingSettings(), first_frame: int = 0, say: Callable[[str], None] | None = print
+    frames: list[np.ndarray],
+    settings: TrackingSettings = TrackingSettings(),
+    first_frame: int = 0,
+    say: Callable[[str], None] | None = print,
+    verbose: bool = False,
 ) -> Tracks:
     """Track points as ``settings`` say, with a progress bar, and drop the short tracks.
 
     The GOA family says on one ``motion: ...`` line how the points move
-    (:attr:`seedtrack.tracking.linking.MotionFit.summary`) to ``say`` (None: to nobody).
-    ``first_frame`` is the 0-based index of ``frames[0]``.
+    (:func:`seedtrack.wording.motion_lines`; with ``verbose``, the details on more lines) to
+    ``say`` (None: to nobody). ``first_frame`` is the 0-based index of ``frames[0]``.
 
     Examples
     --------
     >>> import numpy as np
     >>> frames = [np.array([[10.0 + 2 * k, 10.0], [40.0 - 2 * k, 30.0]]) for k in range(6)]
     >>> track_frames(frames, TrackingSettings(min_length=3)).n_tracks  # doctest: +ELLIPSIS
-    motion: smooth-motion default: only 8 unambiguous 3-frame chains (need 30) ...
+    motion: smooth-motion default, tracked with IM2, no speed limit
     2
     """
     if settings.algorithm not in GOA_FAMILY:
@@ -201,5 +236,60 @@ def track_frames(
             first_links=settings.first_links,
         )
     if say is not None:
-        say(fit.summary)
+        for line in motion_lines(fit, verbose):
+            say(line)
     return drop_short(tracks, settings.min_length)
+
+
+def link_points(points: Points, settings: LinkSettings, say: Callable[[str], None] | None = print, verbose: bool = False) -> Tracks:
+    """Link grouped points as ``settings`` say (:func:`track_frames`, which says how they move to
+    ``say``, in detail with ``verbose``), the first links of a tracks file read first
+    (:func:`given_first_links`).
+
+    Examples
+    --------
+    >>> from seedtrack.settings import LinkSettings
+    >>> table = {"frame": np.array([0, 0, 1, 1]), "x": np.array([0.0, 9.0, 1.0, 10.0]), "y": np.zeros(4)}
+    >>> link_points(group_points(table, "points"), LinkSettings(algorithm="nn", max_speed=3.0), say=None).n_tracks
+    2
+    """
+    tracking = settings.tracking()
+    if settings.first_links_file is not None:
+        tracking = replace(tracking, first_links=given_first_links(settings.first_links_file, points))
+    return track_frames(points.frames, tracking, points.first_frame, say, verbose)
+
+
+# A given first link's point must lie this close to a measured point, pixels.
+_GIVEN_TOLERANCE = 0.5
+
+
+def given_first_links(path: Path, points: Points) -> np.ndarray:
+    """First links from a tracks file: per track with a point in the first frame, the index of
+    that point in ``points.frames[0]`` and of its point in the second frame (-1 if none).
+
+    Raises
+    ------
+    DataError
+        If the file cannot be read, or one of its first- or second-frame points is not within
+        0.5 px of a measured point, or two of its tracks claim one point.
+    """
+    from scipy.spatial import cKDTree
+
+    table = read_table(path, required=("track_id", "frame", "x", "y"), integer=("track_id", "frame"))
+    frames = (points.first_frame, points.first_frame + points.frame_step)
+    index = {}
+    for column, frame in enumerate(frames):
+        rows = np.flatnonzero(table["frame"] == frame)
+        xy = np.column_stack((table["x"][rows], table["y"][rows]))
+        distance, found = cKDTree(points.frames[column]).query(xy) if len(rows) else (np.empty(0), np.empty(0, int))
+        far = np.flatnonzero(distance > _GIVEN_TOLERANCE)
+        if far.size:
+            line = rows[far[0]] + 2
+            raise DataError(path, f"line {line}: no point of frame {frame} lies within {_GIVEN_TOLERANCE} px of ({xy[far[0], 0]:g}, {xy[far[0], 1]:g})")
+        if np.unique(found).size != found.size:
+            raise DataError(path, f"two tracks start on the same point of frame {frame}")
+        index[column] = dict(zip(table["track_id"][rows].tolist(), found.tolist()))
+    if not index[0]:
+        raise DataError(path, f"no track has a point in frame {frames[0]}, the first frame of the points")
+    ids = sorted(index[0])
+    return np.array([[index[0][i], index[1].get(i, -1)] for i in ids], dtype=np.int64)

@@ -251,6 +251,11 @@ class _VideoReader(_Reader):
             for frame in self._container.decode(stream):
                 if stop is not None and index >= stop:
                     return
+                if (frame.width, frame.height) != self.size:
+                    # A stream may change size part way (joined recordings); its frames are
+                    # then no longer of the clip the first frame's decisions were made on.
+                    yield index, None, f"frame {index} is {frame.width}x{frame.height}, the first frames {self.size[0]}x{self.size[1]}"
+                    return
                 if index >= start and (index - start) % step == 0:
                     yield index, frame.to_ndarray(format=self._format), None
                 index += 1
@@ -343,6 +348,9 @@ def _image_problem(image: np.ndarray | None, size: tuple[int, int], dtype: np.dt
     if image.dtype != dtype:
         # One range holds for the whole clip; data of another depth would be measured on it.
         return f"{name} holds {image.dtype} data, the first frame {dtype}"
+    if image.dtype.kind == "f" and not np.isfinite(image).all():
+        # Nothing can be measured against a background that is not a number.
+        return f"{name} holds NaN or infinite pixels"
     return None
 
 

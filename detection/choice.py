@@ -50,6 +50,7 @@ def choose_detector(
     diameter: int | None = None,
     roi: np.ndarray | None = None,
     min_mass: float | None = None,
+    snr: float | None = None,
 ) -> DetectorChoice:
     """The detector for a clip, from its first frame.
 
@@ -69,6 +70,10 @@ def choose_detector(
         The spot detector's least mass (integrated brightness: the band-passed frame summed over
         a spot's disc, data units times pixels, as :func:`describe` prints it), taken instead of
         the one set from the measured noise.
+    snr : float, optional
+        The spot detector's signal-to-background ratio: the least mass is this many times the
+        typical mass of the background's own maxima (see
+        :func:`seedtrack.detection.spots.fit_spot_settings`); ``min_mass`` wins when both are given.
 
     Returns
     -------
@@ -90,7 +95,7 @@ def choose_detector(
     def spot_settings() -> SpotSettings:
         # Fitted only for the spot detector: measuring the noise costs a fifth of a second on a
         # 640x512 frame, as long as decoding 60 frames.
-        settings = fit_spot_settings(gray, polarity, diameter=diameter or shape.diameter, roi=roi)
+        settings = fit_spot_settings(gray, polarity, diameter=diameter or shape.diameter, roi=roi, snr=snr)
         return settings if min_mass is None else replace(settings, min_mass=float(min_mass))
 
     if detector == "spot":
@@ -107,11 +112,15 @@ def choose_detector(
 
 
 def describe(settings: SpotSettings) -> str:
-    """The spot settings in words: diameter and least mass.
+    """The spot settings in words: diameter, least mass and, where the background's maxima were
+    measured, the signal-to-background ratio it stands for.
 
     Example
     -------
     >>> describe(SpotSettings(diameter=9, min_mass=40.0, floor=1.5))
     'diameter 9 px, least mass 40 (noise floor 1.5)'
+    >>> describe(SpotSettings(diameter=11, min_mass=72.0, floor=0.09, background_mass=25.0))
+    'diameter 11 px, least mass 72 = snr 2.88 x background maxima 25 (noise floor 0.09)'
     """
-    return f"diameter {settings.diameter} px, least mass {settings.min_mass:.3g} (noise floor {settings.floor:.3g})"
+    ratio = f" = snr {settings.min_mass / settings.background_mass:.3g} x background maxima {settings.background_mass:.3g}" if settings.background_mass > 0 else ""
+    return f"diameter {settings.diameter} px, least mass {settings.min_mass:.3g}{ratio} (noise floor {settings.floor:.3g})"

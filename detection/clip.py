@@ -84,6 +84,9 @@ class ClipDetector:
         The spot detector's least mass (integrated brightness, data units times pixels, as
         :func:`seedtrack.detection.choice.describe` prints it); set from the first frame's
         noise when not given.
+    snr : float, optional
+        The spot detector's signal-to-background ratio (see
+        :func:`seedtrack.detection.choice.choose_detector`); ``min_mass`` wins when both are given.
     roi : "auto", "none", Circle or ndarray of uint8 (H, W)
         "auto": the dish found on the first frame, or the whole frame if there is none clearly;
         "none": the whole frame; a circle in pixels; a mask, nonzero inside.
@@ -123,18 +126,21 @@ class ClipDetector:
         background: np.ndarray | None = None,
         diameter: int | None = None,
         min_mass: float | None = None,
+        snr: float | None = None,
     ) -> None:
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
         if min_mass is not None and not (math.isfinite(min_mass) and min_mass >= 0):
             raise ValueError(f"min_mass must be finite and >= 0, got {min_mass:g}")
+        if snr is not None and not (math.isfinite(snr) and snr > 0):
+            raise ValueError(f"snr must be finite and > 0, got {snr:g}")
         if isinstance(roi, str) and roi not in ("auto", "none"):
             raise ValueError(f"roi must be 'auto', 'none', a Circle or a mask, got {roi!r}")
         self.options = options
         self.circle = roi if isinstance(roi, Circle) else None
         self.roi = roi if isinstance(roi, np.ndarray) else None
         self._pending_roi = roi
-        self._detector, self._diameter, self._min_mass = detector, diameter, min_mass
+        self._detector, self._diameter, self._min_mass, self._snr = detector, diameter, min_mass, snr
         self.choice: DetectorChoice | None = None
         self._background = background
         self._first = True
@@ -149,6 +155,8 @@ class ClipDetector:
             uint8, or deeper (uint16, float): mapped to 8 bits for blobs by the range of the
             first frame's data, kept as it is for spots.
         """
+        if image.dtype.kind == "f" and not np.isfinite(image).all():
+            raise ValueError("the frame holds NaN or infinite pixels: nothing can be measured against them")
         if self._first:
             # Deeper data keep one map to 8 bits for the whole clip, from their range.
             self._span = value_range(image)
@@ -176,7 +184,7 @@ class ClipDetector:
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
         scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background
         self.choice = choose_detector(
-            scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi, min_mass=self._min_mass
+            scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi, min_mass=self._min_mass, snr=self._snr
         )
 
 

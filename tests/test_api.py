@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 import doctest
 import importlib
+import inspect
 import subprocess
 import sys
+import textwrap
 import warnings
 from pathlib import Path
 
@@ -16,13 +18,18 @@ import pandas as pd
 import pytest
 
 import seedtrack
-from seedtrack.cli import main
+import seedtrack.api
+from seedtrack.cli import build_parser, main
+from seedtrack.commands import settings_of
 from seedtrack.data.csvio import TRACK_COLUMNS, write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.trackfile import write_tracks
 from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.errors import OptionError
+from seedtrack.pipeline import DetectSettings
+from seedtrack.settings import EvaluateSettings, LinkSettings, RenderSettings
 
 
 def command(capsys, *argv) -> str:
@@ -163,7 +170,7 @@ def test_the_library_tracker_gives_the_command_answer_on_random_walkers():
 
 def test_options_are_the_commands_and_mistakes_name_the_keyword():
     points = pd.DataFrame({"frame": [0, 0, 1, 1], "x": [0.0, 9.0, 1.0, 10.0], "y": [0.0, 0.0, 0.0, 0.0]})
-    with pytest.raises(TypeError, match="max_sped.*max_speed"):
+    with pytest.raises(TypeError, match="max_sped"):
         seedtrack.link(points, max_sped=3.0)
     with pytest.raises(ValueError, match="^max_speed must be a positive"):
         seedtrack.link(points, max_speed=-1.0)
@@ -185,6 +192,50 @@ def test_options_are_the_commands_and_mistakes_name_the_keyword():
         seedtrack.detect([np.zeros((10, 10), np.uint8), np.zeros((10, 12), np.uint8)])
     with pytest.raises(TypeError, match="preview"):
         seedtrack.detect([np.zeros((10, 10), np.uint8)], preview="p.png")
+    with pytest.raises(OptionError, match="^algorithm must be one of") as raised:
+        seedtrack.link(points, algorithm="knn")
+    assert raised.value.names == ("algorithm",)
+    with pytest.raises(ValueError, match="^phi_max, motion only apply to algorithm goa or goa-updown, not nn"):
+        seedtrack.link(points, algorithm="nn", phi_max=0.2, motion="smooth")
+    with pytest.raises(ValueError, match="^frame chooses the frame of a .png output"):
+        seedtrack.render("clip.mp4", points, "out.gif", frame=2)
+
+
+def test_the_library_loads_no_command_and_builds_no_parser(dish, tmp_path):
+    code = textwrap.dedent(
+        f"""
+        import argparse, sys
+        import seedtrack
+        argparse.ArgumentParser.__init__ = None  # building a parser would fail
+        clip = {str(dish / "clip.mp4")!r}
+        tracks = seedtrack.link(seedtrack.detect(clip, end=4), max_gap=2)
+        scores = seedtrack.evaluate(tracks, {str(dish / "truth.csv")!r}, tol=2.0)
+        seedtrack.render(clip, tracks, {str(tmp_path / "last.png")!r}, trail=3)
+        print(sorted(m for m in sys.modules if m.startswith(("seedtrack.commands", "seedtrack.cli"))))
+        """
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "[]"
+    assert (tmp_path / "last.png").is_file()
+
+
+@pytest.mark.parametrize(
+    "function, settings, command, inputs",
+    [
+        (seedtrack.api.detect, DetectSettings, "detect", ["clip.mp4", "--out", "d.csv"]),
+        (seedtrack.api.link, LinkSettings, "track", ["points.csv", "--out", "t.csv"]),
+        (seedtrack.api.evaluate, EvaluateSettings, "evaluate", ["tracks.csv", "truth.csv"]),
+        (seedtrack.api.render, RenderSettings, "render", ["clip.mp4", "tracks.csv", "--out", "o.mp4"]),
+    ],
+)
+def test_signatures_name_the_commands_options_with_their_defaults(function, settings, command, inputs):
+    keywords = {p.name: p.default for p in inspect.signature(function).parameters.values() if p.kind is p.KEYWORD_ONLY}
+    defaults = {f.name: getattr(settings(), f.name) for f in dataclasses.fields(settings) if f.init}
+    assert {name: keywords[name] for name in defaults} == defaults
+    assert all(name in (function.__doc__ or "") for name in keywords)
+    # The command's defaults are the same settings.
+    assert settings_of(settings, build_parser(command).parse_args([command, *inputs])) == settings()
 
 
 def test_evaluate_takes_trackpy_tables_and_warns_of_frames_numbered_from_one():
@@ -204,7 +255,7 @@ def test_import_seedtrack_loads_nothing_until_used():
         seedtrack.tracking.no_such_module
 
 
-@pytest.mark.parametrize("module", ["seedtrack.api", "seedtrack.points", "seedtrack.tracking.linking", "seedtrack.tracking.evaluation", "seedtrack.detection.clip"])
+@pytest.mark.parametrize("module", ["seedtrack.api", "seedtrack.settings", "seedtrack.wording", "seedtrack.errors", "seedtrack.pipeline", "seedtrack.points", "seedtrack.tracking.linking", "seedtrack.tracking.evaluation", "seedtrack.detection.clip"])
 def test_docstring_examples_run(module):
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -6,7 +6,7 @@ import pytest
 
 from seedtrack.data.frames import open_frames
 from seedtrack.detection.blobs import to_gray
-from seedtrack.pipeline import DetectionSettings, detect_clip
+from seedtrack.pipeline import DetectSettings, detect_clip
 
 from footage import BEADS, needs_beads
 
@@ -18,10 +18,12 @@ def quiet(line):
 
 @needs_beads
 def test_beads_get_the_spot_detector_at_trackpys_diameter():
-    found = detect_clip(BEADS, DetectionSettings(end=6), say=quiet)
+    found = detect_clip(BEADS, DetectSettings(end=6), say=quiet)
     assert found.choice.name == "spot" and found.choice.spots.diameter == 11 and found.choice.spots.polarity == "dark"
+    # trackpy's walkthrough finds about 585 a frame here; a threshold that took the background's
+    # own maxima for beads found about 1,215 (tests/benchmarks/bench_bulk_detect.py).
     counts = found.detections.counts
-    assert 900 <= np.median(counts) <= 1300, counts
+    assert 0.75 * 585 <= np.median(counts) <= 1.33 * 585, counts
 
 
 @needs_beads
@@ -36,7 +38,7 @@ def test_same_beads_in_8_16_bit_and_float_tiffs_give_the_same_detections(tmp_pat
         cv2.imwrite(str(folders["png8"] / f"{k}.png"), frame)
         cv2.imwrite(str(folders["tif16"] / f"{k}.tif"), frame.astype(np.uint16) * 257)
         cv2.imwrite(str(folders["tif32"] / f"{k}.tif"), frame.astype(np.float32) / 255)
-    settings = DetectionSettings(detector=detector)
+    settings = DetectSettings(detector=detector)
     tables = {name: detect_clip(folder, settings, say=quiet).detections.to_rows() for name, folder in folders.items()}
     assert len(tables["png8"]["x"]) > 1000
     for name in ("tif16", "tif32"):

@@ -11,7 +11,7 @@ import seedtrack as seedtrack_api
 from seedtrack.cli import main
 from seedtrack.commands.detect import preview_caption
 from seedtrack.detection.choice import choose_detector
-from seedtrack.pipeline import DetectionSettings, detect_clip
+from seedtrack.pipeline import DetectSettings, detect_clip
 from seedtrack.data.csvio import read_table
 from seedtrack.data.dish import DishSpec, make_dish_scene, write_dish_clip
 from seedtrack.data.video import write_video
@@ -182,8 +182,8 @@ def test_preview_says_which_detector_ran_with_its_size_and_threshold(tmp_path, c
     first = capsys.readouterr().out.splitlines()[0]
     assert first.startswith("detector: small round spots") and "diameter 9 px" in first
     found = detect_clip(folder, say=lambda line: None)
-    assert preview_caption(found.choice, DetectionSettings()).startswith("spot detector: diameter 9 px, least mass")
-    assert preview_caption(choose_detector(np.zeros((8, 8)), "dark", detector="blob"), DetectionSettings()) == (
+    assert preview_caption(found.choice, DetectSettings()).startswith("spot detector: diameter 9 px, least mass")
+    assert preview_caption(choose_detector(np.zeros((8, 8)), "dark", detector="blob"), DetectSettings()) == (
         "blob detector: threshold otsu, area 4 px and up"
     )
     assert cv2.imread(str(tmp_path / "p.png")) is not None

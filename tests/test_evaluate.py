@@ -108,3 +108,16 @@ def test_evaluate_an_empty_result(tmp_path):
     report = json.loads((tmp_path / "out" / "evaluation.json").read_text())
     assert (report["track_error"], report["mota"], report["idf1"], report["misses"], report["motp_px"]) == (1.0, 0.0, 0.0, 18, None)
     assert len((tmp_path / "out" / "wrong_tracks.csv").read_text().splitlines()) == 4
+
+
+def test_truth_follows_tracks_as_compare_takes_its_inputs_and_the_option_still_works(tmp_path, capsys):
+    write_tracks(tmp_path / "result.csv", _swapped())
+    write_tracks(tmp_path / "truth.csv", _lines())
+    printed = []
+    for form in (["truth.csv"], ["--truth", "truth.csv"]):
+        assert main(["evaluate", str(tmp_path / "result.csv"), *(str(tmp_path / w) if w.endswith(".csv") else w for w in form)]) == 0
+        printed.append(capsys.readouterr().out)
+    assert printed[0] == printed[1] and "correct_tracks   0" in printed[0]
+    for form in ([], [str(tmp_path / "truth.csv"), "--truth", str(tmp_path / "truth.csv")]):
+        assert main(["evaluate", str(tmp_path / "result.csv"), *form]) == 2
+        assert "error: give TRUTH once: after TRACKS (or as --truth TRUTH)" in capsys.readouterr().err

@@ -153,7 +153,7 @@ def test_track_follows_drifting_walkers_in_the_frame_of_their_drift(tmp_path, ca
     points, truth = walkers(count=200, sigma=1.0, drift=(3.0, 0.0), frames=15)
     _write_points(tmp_path / "points.csv", points)
     assert main(["track", str(tmp_path / "points.csv"), "--out", str(tmp_path / "t.csv"), *options]) == 0
-    drift = re.search(r"measured on a first pass: .* drift \((\S+), (\S+)\) px/frame", capsys.readouterr().out)
+    drift = re.search(r"^motion: .* drift \((\S+), (\S+)\) px/frame\), speed limit", capsys.readouterr().out)
     assert drift and float(drift[1]) == pytest.approx(3.0, abs=0.2) and float(drift[2]) == pytest.approx(0.0, abs=0.2)
     scores = score_tracks(read_tracks(tmp_path / "t.csv"), truth)
     assert scores.link_error < 0.01

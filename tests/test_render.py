@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 
 from seedtrack.cli import main
-from seedtrack.commands.compare import disagreeing_links
+from seedtrack.scoring import disagreeing_links
 from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Style, TrackLayer, View, annotate, draw_text, ring_radius, summary_picture, track_colour
 from seedtrack.data.csvio import write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip

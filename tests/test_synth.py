@@ -92,7 +92,7 @@ def test_longer_gaps_and_points_entering_and_leaving(tmp_path):
 
 
 def test_the_readme_psmg_example_prints_the_figures_it_quotes(tmp_path, monkeypatch, capsys):
-    readme = (Path(__file__).parents[1] / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
     block = readme.split("With 10% of the points missed:", 1)[1].split("```bash\n", 1)[1].split("```", 1)[0]
     monkeypatch.chdir(tmp_path)
     for line in block.splitlines():

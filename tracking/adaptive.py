@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .goa import GOAConfig
-from .motion import SpeedLimits
+from .motion import IndividualModel, SpeedLimits
 from .persistence import MotionStatistics, PersistentModel, fit_chains, measured_chains
 from .repair import resolve_crossings
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
@@ -173,7 +173,7 @@ def measured_config(config: GOAConfig, statistics: MotionStatistics) -> GOAConfi
     (20.0, 17.0)
     """
     measured = max(SPEED_MARGIN * statistics.fastest, 1.0)
-    model = PersistentModel(replace(statistics, drift=(0.0, 0.0)), gate=MEASURED_MOTION_GATE_SIGMAS, speed_scale=FIRST_LINK_SCALE * measured)
+    model = IndividualModel(name="persistent", statistics=replace(statistics, drift=(0.0, 0.0)), gate=MEASURED_MOTION_GATE_SIGMAS, speed_scale=FIRST_LINK_SCALE * measured)
     if config.d_max is None:
         return replace(config, individual=model, d_max=measured)
     # The user's limit is on speeds in the image; about the drift a speed up to limit + |drift|

@@ -539,3 +539,8 @@ def acceptable_links(
     cost = model.cost(candidates, phi_max, limits.scale(candidates.velocity))
     keep = cost <= phi_max
     return candidates.subset(keep), cost[keep]
+
+
+# The default link cost, the model measured on a first pass, is registered with the others
+# (persistence.py builds on this module, so it is imported last).
+from . import persistence  # noqa: E402,F401

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .motion import Candidates
+from .motion import Candidates, IndividualModel
 from .tracks import NO_MEASUREMENT, Tracks
 
 # Sigmas from the prediction at which a link costs phi_max (the weight of a slave). Under a 2-D
@@ -414,12 +414,14 @@ def _non_negative_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
-class PersistentModel:
+class PersistentModel(IndividualModel, key="persistent"):
     """The individual model of :class:`MotionStatistics`: cost of a link from its prediction.
 
-    Used wherever GOA takes an individual model (``GOAConfig.individual``). Three-frame first
-    links are still scored by IM2's direction and speed (``w1``, ``w2``), which suits a first
-    link whatever the scale of the motion.
+    The default link cost: registered as "persistent" beside IM1-IM3
+    (:data:`seedtrack.tracking.motion.INDIVIDUAL_MODELS`), built by that name from the
+    statistics a first pass measured (``IndividualModel(name="persistent", statistics=...)``).
+    Three-frame first links are still scored by IM2's direction and speed (``w1``, ``w2``),
+    which suits a first link whatever the scale of the motion.
 
     Attributes
     ----------
@@ -439,7 +441,9 @@ class PersistentModel:
     w2: float = 0.9
     speed_scale: float | None = None
     name: str = "persistent"
-    order: int = 2
+
+    def __post_init__(self) -> None:
+        self._check_name()
 
     def cost(self, candidates: Candidates, phi_max: float, d_max: float) -> np.ndarray:
         """``phi_max`` times the squared distance of each candidate velocity from its prediction

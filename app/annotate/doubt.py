@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from seedtrack.tracking.tracks import Tracks
 
-from ..commands.compare import DEFAULT_TOLERANCE, disagreeing_links
+from ..scoring import DEFAULT_TOLERANCE, disagreeing_links
 
 # A link is a close call when another point is at most this many times farther than its own.
 CLOSE_CALL_RATIO = 0.6

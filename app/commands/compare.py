@@ -3,22 +3,21 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np
 
 from seedtrack.data.trackfile import FORMATS, read_tracks
-from seedtrack.tracking.metrics import UNMATCHED, match_points
 from seedtrack.tracking.tracks import Tracks
 
-from ..errors import UsageError
 from ..frame_output import write_frames
 from ..drawing import COMPARE_A_BGR, COMPARE_B_BGR, WARNING_BGR, TrackLayer, View, annotate, track_links
+from ..rendering import open_range, output_checked
+from ..scoring import DEFAULT_TOLERANCE, disagreeing_links
+from ..settings import RenderSettings, check_tolerance
 from ..wording import CLIP_INPUT_HELP, counted
-from .render import add_view_options, check_view_options, open_range
-
-DEFAULT_TOLERANCE = 3.0
+from . import settings_of
+from .render import add_view_options
 
 
 def add_parser(subparsers) -> None:
@@ -42,47 +41,23 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run, overlay=False)
 
 
-def disagreeing_links(tracks: Tracks, other: Tracks, tolerance: float) -> np.ndarray:
-    """Links of ``tracks`` that ``other`` does not make.
-
-    Parameters
-    ----------
-    tracks, other : Tracks
-        Frames aligned by their 0-based frame indices.
-    tolerance : float
-        Matching distance, pixels (points matched one to one per frame, optimal assignment).
-
-    Returns
-    -------
-    ndarray of bool, shape (tracks.n_tracks, tracks.n_frames)
-        True at the column where a link (see :func:`seedtrack.drawing.track_links`) ends when its two
-        points are not both matched to the same track of ``other``.
-    """
-    matched = match_points(tracks, other, tolerance)
-    rows, starts, ends = track_links(tracks.present)
-    differ = (matched[rows, starts] != matched[rows, ends]) | (matched[rows, ends] == UNMATCHED)
-    warnings = np.zeros(tracks.present.shape, bool)
-    warnings[rows[differ], ends[differ]] = True
-    return warnings
-
-
 def _short_name(path: Path, other: Path) -> str:
     """The file name, with its folder when the other file has the same name (run1/tracks.csv)."""
     return f"{path.parent.name}/{path.name}" if path.name == other.name and path.parent.name else path.name
 
 
 def run(args: argparse.Namespace) -> int:
-    kind = check_view_options(args)
-    if not (args.tol > 0 and math.isfinite(args.tol)):
-        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
+    settings = settings_of(RenderSettings, args)
+    kind = output_checked(args.out, settings)
+    check_tolerance(args.tol)
     a = read_tracks(args.a, args.format_a)
     b = read_tracks(args.b, args.format_b)
     warnings_a = disagreeing_links(a, b, args.tol)
     warnings_b = disagreeing_links(b, a, args.tol)
-    with open_range(args, kind, [(args.a, a), (args.b, b)]) as source:
-        view = View.of(source.size, args.crop, args.scale)
-        layer_a = TrackLayer(a, view, trail=args.trail, labels=args.labels, colour=COMPARE_A_BGR, warnings=warnings_a)
-        layer_b = TrackLayer(b, view, trail=args.trail, labels=args.labels, colour=COMPARE_B_BGR, warnings=warnings_b)
+    with open_range(args.input, settings, kind, [(args.a, a), (args.b, b)]) as source:
+        view = View.of(source.size, settings.crop, settings.scale)
+        layer_a = TrackLayer(a, view, trail=settings.trail, labels=settings.labels, colour=COMPARE_A_BGR, warnings=warnings_a)
+        layer_b = TrackLayer(b, view, trail=settings.trail, labels=settings.labels, colour=COMPARE_B_BGR, warnings=warnings_b)
         legend_a = ("line", COMPARE_A_BGR, f"A: {_short_name(args.a, args.b)}")
         legend_b = ("line", COMPARE_B_BGR, f"B: {_short_name(args.b, args.a)}")
         warning = ("line", WARNING_BGR, "link the other lacks")
@@ -90,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
             frames = ((index, annotate(image, index, view, [layer_a, layer_b], legend=[legend_a, legend_b, warning])) for index, image in source.shown())
         else:
             frames = _side_by_side(source, view, (layer_a, [legend_a, warning]), (layer_b, [legend_b, warning]))
-        count = write_frames(args.out, frames, args.fps or source.fps, source.frame_count)
+        count = write_frames(args.out, frames, settings.fps or source.fps, source.frame_count)
     print(
         f"wrote {args.out}: {counted(count, 'frame')}; links disagreeing within {args.tol:g} px: "
         f"A {int(warnings_a.sum())} of {_links(a)}, B {int(warnings_b.sum())} of {_links(b)}"

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from seedtrack.data.atomic import output_folder
@@ -12,8 +11,9 @@ from seedtrack.data.trackfile import read_tracks
 from seedtrack.tracking.evaluation import evaluate_tracks
 
 from ..errors import UsageError, in_option_names
-from ..pipeline import DetectionSettings, run_pipeline
-from .tracker_options import add_tracker_options, tracking_settings
+from ..pipeline import DetectSettings, run_pipeline
+from ..settings import check_tolerance
+from .tracker_options import add_tracker_options, add_verbose_option, tracking_settings
 
 
 def add_parser(subparsers) -> None:
@@ -35,6 +35,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("--tol", type=float, default=1.0, metavar="PX", help="matching distance to the truth, pixels (default 1)")
     add_tracker_options(parser)
+    add_verbose_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -44,8 +45,7 @@ _MIN_FRAMES = 3
 
 def run(args: argparse.Namespace) -> int:
     tracking = tracking_settings(args)
-    if not (args.tol > 0 and math.isfinite(args.tol)):
-        raise UsageError(f"--tol must be a positive number of pixels, got {args.tol:g}")
+    check_tolerance(args.tol)
     if args.seeds < 1:
         raise UsageError(f"--seeds must be at least 1, got {args.seeds}")
     if args.frames < _MIN_FRAMES:
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(in_option_names(str(error), ("seeds", "frames", "rim_speed", "random_seed", "hidden_probability"))) from None
     with output_folder(args.out):
         scene = write_dish_clip(spec, args.out)
-        run_pipeline(args.out / "clip.mp4", args.out, DetectionSettings(), tracking)
+        run_pipeline(args.out / "clip.mp4", args.out, DetectSettings(), tracking, verbose=args.verbose)
     result = read_tracks(args.out / "tracks.csv")
     scores, _ = evaluate_tracks(result, scene.truth, args.tol)
     print(

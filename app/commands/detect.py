@@ -6,9 +6,6 @@ The detection options are defined here once and shared by every command that det
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import os
-import re
 from pathlib import Path
 
 import cv2
@@ -18,25 +15,25 @@ from seedtrack.data.atomic import atomic_path, check_target
 from seedtrack.data.csvio import check_table_name, write_table
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import IMAGE_SUFFIXES
-from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES, BlobOptions
+from seedtrack.detection.blobs import BACKGROUNDS, POLARITIES
 from seedtrack.detection.choice import describe
 from seedtrack.detection.roi import Circle
 
-from ..errors import UsageError, in_option_names, output_file
+from ..errors import UsageError, output_file
 from ..parallel import default_workers
 from ..drawing import SHIFT, draw_text, to_fixed
-from ..pipeline import DETECTORS, DetectionSettings, detect_clip
+from ..pipeline import DETECTORS, DetectSettings, detect_clip
 from ..review import review_zoom
 from ..wording import CLIP_INPUT_HELP, counted
+from . import settings_of
 
-_CIRCLE = re.compile(r"^\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*$")
 _FOUND_BGR = (0, 0, 255)
 _ROI_BGR = (0, 200, 0)
 
 
 def add_detection_options(parser: argparse.ArgumentParser) -> None:
     """Options of the detector and of the frames read, shared by every command that detects."""
-    defaults = BlobOptions()
+    defaults = DetectSettings()
     group = parser.add_argument_group("detection")
     group.add_argument(
         "--detector",
@@ -62,6 +59,16 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
         help="spot detector: least integrated brightness of a spot (the band-passed frame summed over its "
         "disc, grey levels times pixels; the 'least mass' the detector line and --preview print) (default: "
         "set from the noise measured on the first frame)",
+    )
+    group.add_argument(
+        "--snr",
+        type=float,
+        default=None,
+        metavar="R",
+        help="spot detector: signal-to-background ratio, the least mass as a multiple of the typical mass of the "
+        "background's own maxima (blur, compression blocks, uneven light); higher finds fewer, surer spots; "
+        "the detector line and --preview print the ratio and count in use (default: where the first frame's "
+        "masses show objects apart from background, else from the noise; --min-mass wins)",
     )
     group.add_argument(
         "--polarity",
@@ -91,7 +98,7 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
         help="object pixels: otsu, Otsu's level among pixels above the noise; adaptive, local mean + 3 local "
         "standard deviations; N, a contrast of at least N grey levels (default otsu)",
     )
-    group.add_argument("--min-area", type=float, default=defaults.min_area_px, metavar="PX", help=f"smallest object, pixels (default {defaults.min_area_px:g})")
+    group.add_argument("--min-area", type=float, default=defaults.min_area, metavar="PX", help=f"smallest object, pixels (default {defaults.min_area:g})")
     group.add_argument("--max-area", type=float, default=None, metavar="PX", help="largest object, pixels (default 1%% of the frame)")
     group.add_argument(
         "--roi",
@@ -112,61 +119,9 @@ def add_detection_options(parser: argparse.ArgumentParser) -> None:
     frames.add_argument("--step", type=int, default=1, metavar="N", help="every Nth frame (default 1)")
 
 
-def detection_settings(args: argparse.Namespace) -> DetectionSettings:
-    """The detection settings the options ask for.
-
-    Raises
-    ------
-    UsageError
-        If the options make no sense.
-    """
-    threshold: str | float = args.threshold
-    if threshold not in ("otsu", "adaptive"):
-        try:
-            threshold = float(threshold)
-        except ValueError:
-            raise UsageError(f"--threshold must be otsu, adaptive or a number of grey levels, got {args.threshold!r}") from None
-    if threshold == "adaptive" and args.detector == "spot":
-        raise UsageError("--threshold adaptive works with --detector blob only")
-    if args.diameter is not None and (args.diameter < 3 or args.diameter % 2 == 0):
-        raise UsageError(f"--diameter must be an odd number of pixels >= 3, got {args.diameter}")
-    if args.min_mass is not None and not (np.isfinite(args.min_mass) and args.min_mass >= 0):
-        raise UsageError(f"--min-mass must be a finite number >= 0, got {args.min_mass:g}")
-    try:
-        options = BlobOptions(
-            polarity=args.polarity,
-            background=args.background,
-            background_size=args.background_size,
-            threshold=threshold,
-            min_area_px=args.min_area,
-            max_area_px=args.max_area,
-            split=args.split,
-        )
-    except ValueError as error:
-        raise UsageError(in_option_names(str(error), (f.name for f in dataclasses.fields(BlobOptions)))) from None
-    for name in ("start", "end", "step"):
-        value = getattr(args, name)
-        if value is not None and value < (1 if name == "step" else 0):
-            raise UsageError(f"--{name} must be {'>= 1' if name == 'step' else 'a frame index >= 0'}, got {value}")
-    if args.end is not None and args.end <= args.start:
-        raise UsageError(f"--end ({args.end}) must come after --start ({args.start})")
-    return DetectionSettings(options, args.detector, args.diameter, _roi(args.roi), args.start, args.end, args.step, args.min_mass)
-
-
-def _roi(text: str) -> str | Circle | Path:
-    if text in ("auto", "none"):
-        return text
-    circle = _CIRCLE.match(text)
-    if circle:
-        x, y, r = (float(value) for value in circle.groups())
-        if not all(np.isfinite((x, y, r))) or r <= 0:
-            raise UsageError(f"--roi circle needs finite X,Y and a radius > 0, got {text!r}")
-        return Circle(x, y, r)
-    if not Path(text).is_file():
-        if Path(text).suffix.lower() in IMAGE_SUFFIXES or "/" in text or os.sep in text:
-            raise UsageError(f"--roi {text}: no such mask image file")
-        raise UsageError(f"--roi takes auto, none, a circle X,Y,R in pixels, or a mask image file; {text!r} is none of these")
-    return Path(text)
+def detection_settings(args: argparse.Namespace) -> DetectSettings:
+    """The detection settings the options ask for (an OptionError names an option that makes no sense)."""
+    return settings_of(DetectSettings, args)
 
 
 def draw_preview(
@@ -203,7 +158,7 @@ def draw_preview(
     return page
 
 
-def preview_caption(choice, settings: DetectionSettings) -> str:
+def preview_caption(choice, settings: DetectSettings) -> str:
     """Which detector ran, with its size and threshold, in a few words for the preview."""
     if choice.spots is not None:
         return f"spot detector: {describe(choice.spots)}"

@@ -1,4 +1,4 @@
-"""``seedtrack evaluate TRACKS --truth TRUTH``: score a track set against ground truth."""
+"""``seedtrack evaluate TRACKS TRUTH``: score a track set against ground truth."""
 
 from __future__ import annotations
 
@@ -9,24 +9,15 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-from scipy.spatial import cKDTree
-
 from seedtrack.data.atomic import atomic_path, output_folder
 from seedtrack.data.csvio import write_table
-from seedtrack.data.errors import DataError
 from seedtrack.data.trackfile import FORMATS, read_tracks
-from seedtrack.tracking.clear_mot import ClearMotScores
-from seedtrack.tracking.diagnosis import first_errors
-from seedtrack.tracking.evaluation import Scores, evaluate_tracks
-from seedtrack.tracking.tracks import Tracks
 
 from ..error_plot import draw_error_plot, write_png
 from ..errors import UsageError
-
-DEFAULT_TOLERANCE = 3.0
-# A result matching fewer true points than this is checked against the truth one frame off.
-_WELL_MATCHED = 0.9
+from ..scoring import DEFAULT_TOLERANCE, assess
+from ..settings import EvaluateSettings
+from . import settings_of
 
 
 def add_parser(subparsers) -> None:
@@ -43,7 +34,9 @@ def add_parser(subparsers) -> None:
         "finite number in either file, the exit status is 2.",
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="result tracks (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
-    parser.add_argument("--truth", type=Path, required=True, metavar="TRUTH", help="true tracks, in any of the same formats")
+    parser.add_argument("truth", type=Path, nargs="?", default=None, metavar="TRUTH", help="true tracks, in any of the same formats")
+    # The older form, kept working: TRUTH as an option.
+    parser.add_argument("--truth", dest="truth_option", type=Path, default=None, metavar="TRUTH", help="TRUTH given as an option instead")
     parser.add_argument("--tol", type=float, default=DEFAULT_TOLERANCE, metavar="PX", help=f"matching distance in pixels (default {DEFAULT_TOLERANCE:g})")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--truth-format", choices=sorted(FORMATS), default=None, help="format of TRUTH (default: from the extension and contents)")
@@ -51,78 +44,19 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(run=run)
 
 
-def evaluate(tracks_path: Path, truth_path: Path, tolerance: float, tracks_format: str | None = None, truth_format: str | None = None):
+def evaluate(tracks_path: Path, truth_path: Path, settings: EvaluateSettings = EvaluateSettings()):
     """Read both files and compute every measure.
 
     Returns
     -------
     measures : dict
-        The file names, then :func:`assess`'s scores by name, in report order.
+        The file names, then :func:`seedtrack.scoring.assess`'s scores by name, in report order.
     clear, wrong, hint
-        As :func:`assess` returns them.
+        As :func:`seedtrack.scoring.assess` returns them.
     """
-    scores, clear, wrong, hint = assess(read_tracks(tracks_path, tracks_format), read_tracks(truth_path, truth_format), tolerance, truth_path)
+    result, truth = read_tracks(tracks_path, settings.format), read_tracks(truth_path, settings.truth_format)
+    scores, clear, wrong, hint = assess(result, truth, settings.tol, truth_path)
     return {"tracks": str(tracks_path), "truth": str(truth_path), **dataclasses.asdict(scores)}, clear, wrong, hint
-
-
-def assess(result: Tracks, truth: Tracks, tolerance: float, truth_source) -> tuple[Scores, ClearMotScores, dict[str, np.ndarray], str | None]:
-    """Score a result against the truth read from ``truth_source`` (named in errors and hints).
-
-    Returns
-    -------
-    scores : Scores
-        Rates in [0, 1], MOTP in pixels.
-    clear : ClearMotScores
-        With the per-frame counts.
-    wrong : dict of str to ndarray
-        :func:`seedtrack.tracking.diagnosis.first_errors` of the result.
-    hint : str or None
-        When most true points match nothing but would with the truth's frame numbers one off,
-        a line that says so (truth numbered from 1 against tracks from 0 is a common slip).
-
-    Raises
-    ------
-    DataError
-        If the truth holds no track or a single frame.
-    """
-    if truth.n_tracks == 0:
-        raise DataError(truth_source, "holds no true tracks; there is nothing to score against")
-    if truth.n_frames < 2:
-        raise DataError(truth_source, f"holds a single frame ({truth.first_frame}); scoring links needs at least two")
-    scores, clear = evaluate_tracks(result, truth, tolerance)
-    return scores, clear, first_errors(result, truth, tolerance), _offset_hint(result, truth, tolerance, clear, truth_source)
-
-
-def _offset_hint(result: Tracks, truth: Tracks, tolerance: float, clear: ClearMotScores, truth_path) -> str | None:
-    if clear.num_objects - clear.num_misses >= _WELL_MATCHED * clear.num_objects:
-        return None
-    # Points with a result point near them, not one-to-one matches: as good a sign at a
-    # fraction of the cost, which matters when large poor results are scored.
-    near = {shift: _share_near(result, truth, tolerance, shift) for shift in (0, -1, 1)}
-    for shift in (-1, 1):
-        if near[shift] >= max(_WELL_MATCHED, near[0] + 0.2):
-            return (
-                f"hint: {near[shift]:.0%} of the true points have a result point within {tolerance:g} px with "
-                f"{truth_path}'s frame numbers shifted by {shift:+d} (against {near[0]:.0%} as given); are both "
-                "files' frames 0-based?"
-            )
-    return None
-
-
-def _share_near(result: Tracks, truth: Tracks, tolerance: float, shift: int) -> float:
-    """Share of the true points with a result point within ``tolerance`` pixels in the frame
-    ``shift`` frames after theirs."""
-    near = 0
-    for column in range(truth.n_frames):
-        true_points = truth.xy[truth.present[:, column], column]
-        other = truth.first_frame + column + shift - result.first_frame
-        if true_points.size == 0 or not 0 <= other < result.n_frames:
-            continue
-        result_points = result.xy[result.present[:, other], other]
-        if result_points.size:
-            distance = cKDTree(result_points).query(true_points, distance_upper_bound=tolerance)[0]
-            near += int(np.count_nonzero(np.isfinite(distance)))
-    return near / max(int(truth.present.sum()), 1)
 
 
 def format_table(measures: dict) -> str:
@@ -135,20 +69,23 @@ def format_table(measures: dict) -> str:
     return "\n".join(lines)
 
 
-def check_tolerance(tol: float) -> None:
-    """Refuse a matching distance that is not a positive finite number of pixels.
+def truth_of(args: argparse.Namespace) -> Path:
+    """TRUTH, given after TRACKS or as ``--truth``.
 
     Raises
     ------
     UsageError
+        If it is given both ways or neither.
     """
-    if not (tol > 0 and math.isfinite(tol)):
-        raise UsageError(f"--tol must be a positive number of pixels, got {tol:g}")
+    if (args.truth is None) == (args.truth_option is None):
+        raise UsageError("give TRUTH once: after TRACKS (or as --truth TRUTH)")
+    return args.truth if args.truth is not None else args.truth_option
 
 
 def run(args: argparse.Namespace) -> int:
-    check_tolerance(args.tol)
-    measures, clear, wrong, hint = evaluate(args.tracks, args.truth, args.tol, args.format, args.truth_format)
+    args.truth = truth_of(args)
+    settings = settings_of(EvaluateSettings, args)
+    measures, clear, wrong, hint = evaluate(args.tracks, args.truth, settings)
     print(format_table(measures))
     if hint is not None:
         print(hint, file=sys.stderr)

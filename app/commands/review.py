@@ -13,7 +13,7 @@ from ..error_plot import write_png
 from ..errors import UsageError
 from ..progress import progress_bar
 from ..review import draw_review_page
-from .render import check_fits
+from ..rendering import check_fits
 from ..wording import CLIP_INPUT_HELP, counted
 
 DEFAULT_EVERY = 5

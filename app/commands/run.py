@@ -10,7 +10,7 @@ from ..parallel import default_workers
 from ..pipeline import run_pipeline
 from ..wording import CLIP_INPUT_HELP, counted
 from .detect import add_detection_options, detection_settings
-from .tracker_options import add_tracker_options, tracking_settings
+from .tracker_options import add_tracker_options, add_verbose_option, tracking_settings
 
 
 def add_workers_option(parser: argparse.ArgumentParser) -> None:
@@ -51,12 +51,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (created if missing)")
     add_detection_options(parser)
     add_tracker_options(parser)
+    add_verbose_option(parser)
     add_workers_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args), workers_count(args))
+    detections, tracks = run_pipeline(args.input, args.out, detection_settings(args), tracking_settings(args), workers_count(args), args.verbose)
     print(
         f"{counted(detections.frame_indices.size, 'frame')}, {counted(int(detections.counts.sum()), 'detection')}, {counted(tracks.n_tracks, 'track')}; "
         f"wrote {args.out / 'detections.csv'}, {args.out / 'tracks.csv'}, {args.out / 'overlay.mp4'}"

@@ -3,39 +3,21 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 from pathlib import Path
-
-import numpy as np
 
 from seedtrack.data.atomic import check_target
 from seedtrack.data.csvio import read_points as read_points_table
-from seedtrack.data.csvio import read_table
 from seedtrack.data.trackfile import output_format, write_rows
-from seedtrack.data.errors import DataError
-from seedtrack.tracking.goa import GOAConfig
-from seedtrack.tracking.linking import GOA_FAMILY
-from seedtrack.tracking.motion import COMBINED_MODELS, INDIVIDUAL_MODELS, CombinedModel, IndividualModel
 from seedtrack.tracking.trackers import TRACKERS
-from seedtrack.tracking.tracks import Tracks
 
 from ..allocation import return_freed_memory
-from ..errors import UsageError, option_name, output_file
-from ..points import Points, group_points, point_rows, track_frames
+from ..errors import output_file
+from ..points import Points, group_points, link_points, track_rows
+from ..settings import COMBINED_CHOICES, INDIVIDUAL_CHOICES, LinkSettings
 from ..wording import counted
-from .tracker_options import add_tracker_options, check_limits, lifecycle_config, tracking_settings
+from . import settings_of
+from .tracker_options import add_tracker_options, add_verbose_option
 from .units import add_unit_options, calibration_from
-
-# How a pass starts: our default, the paper's first links alone, and the paper's whole scheme.
-FIRST_LINKS = {
-    "lookahead": {},
-    "nearest": {"initialisation": "im1"},
-    "paper": {"initialisation": "im1", "restart_lost": False},
-}
-# Options that only the GOA family reads; the other trackers refuse them rather than ignore them.
-_GOA_ONLY = ("individual_model", "combined_model", "min_speed", "phi_max", "first_links", "motion")
-# Options of the open GOA-updown (the default) alone.
-_OPEN_ONLY = ("max_gap", "fixed_count")
 
 DESCRIPTION = """\
 Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any other columns are
@@ -99,17 +81,18 @@ def add_parser(subparsers) -> None:
         help="tracker (default goa-updown)",
     )
     add_tracker_options(parser)
+    add_verbose_option(parser)
     add_unit_options(parser)
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
-        choices=tuple(INDIVIDUAL_MODELS),
+        choices=INDIVIDUAL_CHOICES,
         default=None,
         help="cost of one link: im1 nearest neighbour, im2 smooth motion (default), im3 proximal uniformity",
     )
     group.add_argument(
         "--combined-model",
-        choices=tuple(COMBINED_MODELS),
+        choices=COMBINED_CHOICES,
         default=None,
         help="how link costs add up in a frame: cm1 sum (default), cm2 conditioned on competitors",
     )
@@ -126,8 +109,7 @@ def add_parser(subparsers) -> None:
         "the first links instead, as the paper's experiments gave them: each of its tracks in the first frame "
         "(and the second, if it is there) must lie within 0.5 px of a point",
     )
-    # phi_max left unset tells a GOA option given to another tracker from one left at its default.
-    parser.set_defaults(run=run, phi_max=None, motion=None)
+    parser.set_defaults(run=run)
 
 
 def read_points(path: Path) -> Points:
@@ -135,119 +117,15 @@ def read_points(path: Path) -> Points:
     return group_points(read_points_table(path, others_as_text=True), path)
 
 
-# A given first link's point must lie this close to a measured point, pixels.
-_GIVEN_TOLERANCE = 0.5
-
-
-def _first_links_file(args: argparse.Namespace) -> bool:
-    return args.first_links is not None and args.first_links not in FIRST_LINKS
-
-
-def given_first_links(path: Path, points: Points) -> np.ndarray:
-    """First links from a tracks file: per track with a point in the first frame, the index of
-    that point in ``points.frames[0]`` and of its point in the second frame (-1 if none).
-
-    Raises
-    ------
-    DataError
-        If the file cannot be read, or one of its first- or second-frame points is not within
-        0.5 px of a measured point, or two of its tracks claim one point.
-    """
-    from scipy.spatial import cKDTree
-
-    table = read_table(path, required=("track_id", "frame", "x", "y"), integer=("track_id", "frame"))
-    frames = (points.first_frame, points.first_frame + points.frame_step)
-    index = {}
-    for column, frame in enumerate(frames):
-        rows = np.flatnonzero(table["frame"] == frame)
-        xy = np.column_stack((table["x"][rows], table["y"][rows]))
-        distance, found = cKDTree(points.frames[column]).query(xy) if len(rows) else (np.empty(0), np.empty(0, int))
-        far = np.flatnonzero(distance > _GIVEN_TOLERANCE)
-        if far.size:
-            line = rows[far[0]] + 2
-            raise DataError(path, f"line {line}: no point of frame {frame} lies within {_GIVEN_TOLERANCE} px of ({xy[far[0], 0]:g}, {xy[far[0], 1]:g})")
-        if np.unique(found).size != found.size:
-            raise DataError(path, f"two tracks start on the same point of frame {frame}")
-        index[column] = dict(zip(table["track_id"][rows].tolist(), found.tolist()))
-    if not index[0]:
-        raise DataError(path, f"no track has a point in frame {frames[0]}, the first frame of the points")
-    ids = sorted(index[0])
-    return np.array([[index[0][i], index[1].get(i, -1)] for i in ids], dtype=np.int64)
-
-
-def goa_config(args: argparse.Namespace) -> GOAConfig:
-    """The GOA configuration the options ask for (defaults for options not given)."""
-    options = {
-        "individual": IndividualModel(args.individual_model or "im2"),
-        "combined": CombinedModel(args.combined_model or "cm1"),
-        "d_max": args.max_speed,
-        **FIRST_LINKS[args.first_links if args.first_links in FIRST_LINKS else "lookahead"],
-    }
-    if args.phi_max is not None:
-        options["phi_max"] = args.phi_max
-    if args.min_speed is not None:
-        options["d_min"] = args.min_speed
-    try:
-        return GOAConfig(**options)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
-
-
-def check_options(args: argparse.Namespace) -> None:
-    """Refuse options out of range or given to a tracker that does not read them.
-
-    Raises
-    ------
-    UsageError
-    """
-    check_limits(args, non_negative=("min_speed",))
-    if args.min_speed is not None and args.max_speed is not None and args.min_speed >= args.max_speed:
-        raise UsageError(f"--min-speed ({args.min_speed:g}) must be below --max-speed ({args.max_speed:g})")
-    if args.algorithm not in GOA_FAMILY:
-        given = [option_name(name) for name in _GOA_ONLY if getattr(args, name) is not None]
-        if given:
-            raise UsageError(f"{', '.join(given)} only apply to --algorithm goa or goa-updown, not {args.algorithm}")
-    if _first_links_file(args) and args.algorithm != "goa":
-        if args.first_links.startswith("-") or not Path(args.first_links).suffix:
-            raise UsageError(f"--first-links takes lookahead, nearest, paper or a tracks file, not {args.first_links!r}")
-        raise UsageError("--first-links FILE only applies to --algorithm goa (the single pass from given first links)")
-    if _first_links_file(args) and not Path(args.first_links).is_file():
-        raise UsageError(f"--first-links: {args.first_links}: no such file")
-    if args.algorithm != "goa-updown":
-        given = [option_name(name) for name in _OPEN_ONLY if getattr(args, name) is not None]
-        if given:
-            raise UsageError(f"{', '.join(given)} only apply to --algorithm goa-updown, not {args.algorithm}")
-    lifecycle_config(args)
-
-
-def track_points(points: Points, args: argparse.Namespace, say=print) -> Tracks:
-    """Run the tracker the options name on the points (see :func:`seedtrack.points.track_frames`)."""
-    settings = tracking_settings(args, goa_config(args))
-    if _first_links_file(args):
-        settings = replace(settings, first_links=given_first_links(Path(args.first_links), points))
-    return track_frames(points.frames, settings, points.first_frame, say)
-
-
-def track_rows(points: Points, tracks: Tracks) -> dict[str, np.ndarray]:
-    """The columns of tracks.csv: the track columns, then the kept columns (blank when interpolated)."""
-    rows, source = point_rows(points, tracks)
-    measured = source >= 0
-    for name, values in points.kept.items():
-        out = np.full(source.size, "", dtype=object)
-        out[measured] = values[source[measured]]
-        rows[name] = out
-    return rows
-
-
 def run(args: argparse.Namespace) -> int:
-    check_options(args)
+    settings = settings_of(LinkSettings, args)
     units = calibration_from(args)
     return_freed_memory()
     # Now rather than after a long tracking run.
     check_target(args.out)
     output_format(args.out)
     points = read_points(args.points)
-    tracks = track_points(points, args)
+    tracks = link_points(points, settings, verbose=args.verbose)
     spacing = f" ({points.frame_step} frame numbers apart, tracked as consecutive)" if points.frame_step > 1 else ""
     counts = f"{len(points.frames)} frames{spacing}, {counted(sum(f.shape[0] for f in points.frames), 'point')}, {counted(tracks.n_tracks, 'track')}"
     rows = track_rows(points, tracks)

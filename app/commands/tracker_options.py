@@ -7,15 +7,13 @@ detection code.
 from __future__ import annotations
 
 import argparse
-import math
 
-from seedtrack.data.numbers import MAX_COORDINATE_PX
-from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.regime import MOTIONS
 
-from ..errors import UsageError, option_name
 from ..points import TrackingSettings
+from ..settings import LinkSettings
+from . import settings_of
 
 
 def add_tracker_options(parser: argparse.ArgumentParser) -> None:
@@ -58,7 +56,6 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--fixed-count",
         action="store_true",
-        default=None,
         help="GOA-updown as published: one track per point of the first frame, none starts or ends later",
     )
     group.add_argument(
@@ -70,81 +67,16 @@ def add_tracker_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-# The largest value of a limit that still limits, and why.
-_LARGEST = {
-    "phi_max": (1.1, "IM2's smoothness cost lies in 0..1.1; a larger limit admits every link"),
-    "max_speed": (MAX_COORDINATE_PX, "no point moves farther than the largest coordinate read"),
-    "min_speed": (MAX_COORDINATE_PX, "no point moves farther than the largest coordinate read"),
-}
-
-
-def check_limits(args: argparse.Namespace, positive: tuple[str, ...] = ("max_speed", "phi_max"), non_negative: tuple[str, ...] = ()) -> None:
-    """Refuse a tracker limit given that is not a finite number above zero (``positive``) or at
-    least zero (``non_negative``).
-
-    Raises
-    ------
-    UsageError
-        Naming the option as typed.
-    """
-    for options, kind, allowed in ((positive, "a positive", lambda v: v > 0), (non_negative, "a non-negative", lambda v: v >= 0)):
-        for option in options:
-            value = getattr(args, option)
-            if value is not None and not (math.isfinite(value) and allowed(value)):
-                raise UsageError(f"{option_name(option)} must be {kind} finite number, got {value:g}")
-            if value is not None and option in _LARGEST and value > _LARGEST[option][0]:
-                largest, why = _LARGEST[option]
-                raise UsageError(f"{option_name(option)} must be at most {largest:g} ({why}), got {value:g}")
-
-
-def tracker_config(args: argparse.Namespace) -> GOAConfig:
-    """The tracker configuration the options ask for.
-
-    Raises
-    ------
-    UsageError
-        If the options make no sense.
-    """
-    check_limits(args)
-    try:
-        return GOAConfig(phi_max=args.phi_max, d_max=args.max_speed)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
-
-
-def lifecycle_config(args: argparse.Namespace) -> LifecycleConfig | None:
-    """When tracks open and end, or None for the fixed-count scheme (``--fixed-count``).
-
-    Raises
-    ------
-    UsageError
-        If --max-gap or --min-length is negative, or --max-gap comes with --fixed-count.
-    """
-    for option in ("max_gap", "min_length"):
-        value = getattr(args, option)
-        if value is not None and value < 0:
-            raise UsageError(f"{option_name(option)} must be a whole number of frames >= 0, got {value}")
-    if args.fixed_count:
-        if args.max_gap is not None:
-            raise UsageError("--max-gap does not apply with --fixed-count (no track ends)")
-        return None
-    return LifecycleConfig() if args.max_gap is None else LifecycleConfig(max_gap=args.max_gap)
-
-
-def tracking_settings(args: argparse.Namespace, config: GOAConfig | None = None) -> TrackingSettings:
-    """The tracking the options ask for; ``config`` (default :func:`tracker_config`) is the GOA
-    configuration before it is fitted to the motion.
-
-    Raises
-    ------
-    UsageError
-        If the options make no sense.
-    """
-    lifecycle = lifecycle_config(args)
-    algorithm = getattr(args, "algorithm", "goa-updown")
-    if algorithm == "goa-updown-fixed":
-        lifecycle = None
-    keep_model = getattr(args, "individual_model", None) is not None
-    return TrackingSettings(
-        algorithm, config if config is not None else tracker_config(args), lifecycle, args.motion or "auto", keep_model, args.min_length
+def add_verbose_option(parser: argparse.ArgumentParser) -> None:
+    """``--verbose``: how the points move in detail, below the one ``motion:`` line."""
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="below the motion: line, what the first look at the motion found and all that a first pass measured",
     )
+
+
+def tracking_settings(args: argparse.Namespace) -> TrackingSettings:
+    """The tracking the options ask for (:meth:`seedtrack.settings.LinkSettings.tracking`; an
+    OptionError names an option that makes no sense)."""
+    return settings_of(LinkSettings, args).tracking()

@@ -1,6 +1,7 @@
 """Frames per second of the detectors on one core, and of decoding with and without detection.
 
-Run as ``python tests/benchmarks/bench_detect.py``; prints medians of several repeats, in CPU
+Run as ``python tests/benchmarks/bench_detect.py [--write-docs]`` (``--write-docs`` also writes
+its two tables into docs/detection.md, stamped: ``detect-speed``, ``detect-pipeline``); prints medians of several repeats, in CPU
 seconds of this process (a busy shared machine inflates wall-clock time):
 
 - the blob detector with the default options as ``seedtrack detect`` applies them (polarity
@@ -24,6 +25,7 @@ the detector alone; decoding plus detection at least 0.8 times decoding alone.
 
 from __future__ import annotations
 
+import argparse
 import os
 import statistics
 import subprocess
@@ -41,6 +43,7 @@ from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.detection.blobs import BlobOptions, detect_blobs, to_gray
 from seedtrack.detection.clip import ClipDetector
 from seedtrack.detection.spots import detect_spots, fit_spot_settings
+from tables import write_table
 
 CLIP = next(
     (folder / "shared" / "data" / "bulk-water-240-479.mp4" for folder in Path(__file__).resolve().parents if (folder / "shared" / "data").is_dir()),
@@ -114,11 +117,16 @@ def pipeline_seconds(clip: Path, workers: int) -> tuple[float, float]:
     return float(wall), float(used)
 
 
-def pipeline_table(clips: dict[str, Path], repeats: int = 5) -> None:
+PIPELINE_HEADER = ["clip", "decoding alone, frames/s", "workers", "decoding + detection, frames/s", "of decoding alone", "processor time, of decoding alone"]
+SPEED_HEADER = ["frames", "detector", "frames/s, one core", "goal"]
+
+
+def pipeline_table(clips: dict[str, Path], repeats: int = 5) -> list[list[str]]:
     """Decoding alone beside decoding plus detection as ``seedtrack`` runs it, wall clock."""
     print(f"decoding + detection as seedtrack runs it (wall clock, median of {repeats}; load average {os.getloadavg()[0]:.1f}):")
-    print("| clip | decoding alone, frames/s | workers | decoding + detection, frames/s | of decoding alone | processor time, of decoding alone |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("| " + " | ".join(PIPELINE_HEADER) + " |")
+    print("| --- " * len(PIPELINE_HEADER) + "|")
+    rows = []
     for name, clip in clips.items():
         with open_frames(clip) as source:
             frames = source.frame_count
@@ -128,34 +136,52 @@ def pipeline_table(clips: dict[str, Path], repeats: int = 5) -> None:
             both = statistics.median(turn[column][0] for turn in turns)
             ratio = statistics.median(turn[0][0] / turn[column][0] for turn in turns)
             used = statistics.median(turn[0][1] / turn[column][1] for turn in turns)
-            print(f"| {name} | {frames / alone:.0f} | {workers} | {frames / both:.0f} | {ratio:.2f} x | {used:.2f} x |")
+            rows.append([name, f"{frames / alone:.0f}", str(workers), f"{frames / both:.0f}", f"{ratio:.2f} x", f"{used:.2f} x"])
+            print("| " + " | ".join(rows[-1]) + " |")
+    return rows
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write-docs", action="store_true", help="write the tables into docs/detection.md, stamped")
+    args = parser.parse_args()
     cv2.setNumThreads(1)  # one core, as the issues ask
     rng = np.random.default_rng(0)
+    speed: list[list[str]] = []
+    pipeline: list[list[str]] = []
     for width, height, goal in ((640, 512, 200), (1920, 1080, 30)):
         frames = [scene(width, height, 80, rng) for _ in range(20)]
         once = frames_per_second(frames, lambda f: detect_blobs(f, BlobOptions(polarity="dark")))
         every = frames_per_second(frames, lambda f: detect_blobs(f, BlobOptions()))
         print(f"blob detector {width}x{height}: {once:.0f} frames/s (median), {every:.0f} deciding polarity per frame (goal {goal})")
+        speed.append([f"{width}x{height}, 80 dark discs", "blob", f"{once:.0f}", str(goal)])
         spots = [make_spot_field(SpotFieldSpec(width=width, height=height, spots=300 * width * height // (640 * 512), snr=4.0, random_seed=k)).image for k in range(10)]
         settings = fit_spot_settings(spots[0], "light")
         rate = frames_per_second(spots, lambda f: detect_spots(f, settings))
         print(f"spot detector {width}x{height}, 300 spots per 640x512 at SNR 4 (diameter {settings.diameter}): {rate:.0f} frames/s (goal {goal})")
-    if not CLIP.exists():
-        return
+        speed.append([f"{width}x{height}, 300 spots per 640x512 at SNR 4", f"spot (diameter {settings.diameter})", f"{rate:.0f}", str(goal)])
+    if CLIP.exists():
+        pipeline = clip_tables(speed)
+    if args.write_docs:
+        write_table("detection.md", "detect-speed", SPEED_HEADER, speed)
+        if pipeline:
+            write_table("detection.md", "detect-pipeline", PIPELINE_HEADER, pipeline)
+
+
+def clip_tables(speed: list[list[str]]) -> list[list[str]]:
+    """The bulk-water clip and two generated dishes: each one's detector alone (a row added to
+    ``speed``) and decoding with and without it, on one core and as ``seedtrack`` runs it."""
     with tempfile.TemporaryDirectory() as folder:
         dish, large = Path(folder) / "dish" / "clip.mp4", Path(folder) / "large" / "clip.mp4"
         write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), dish.parent)
         write_dish_clip(DishSpec(seeds=200, frames=200, width=1280, height=960, rim_speed=20.0, random_seed=1000), large.parent)
         clips = {CLIP.name: CLIP, "dish, 80 seeds, 640x512": dish, "dish, 200 seeds, 1280x960": large}
         for name, clip in clips.items():
-            one_core(name, clip)
-        pipeline_table(clips)
+            speed.append(one_core(name, clip))
+        return pipeline_table(clips)
 
 
-def one_core(name: str, clip: Path) -> None:
+def one_core(name: str, clip: Path) -> list[str]:
     """The detector ``seedtrack`` picks for ``clip`` alone, and decoding with and without it,
     on one core in CPU time."""
     with open_frames(clip, end=40) as source:
@@ -166,6 +192,7 @@ def one_core(name: str, clip: Path) -> None:
     print(f"{name} ({frames[0].shape[1]}x{frames[0].shape[0]}): {detector.choice.name} detector alone {rate:.0f} frames/s; {detector.choice.reason}")
     alone, both = decoding_rate(clip), decoding_rate(clip, detector.detect)
     print(f"  one core, CPU time: decoding alone {alone:.0f} frames/s, decoding + detection {both:.0f} frames/s: {both / alone:.2f} x (goal 0.8)")
+    return [f"{name} ({frames[0].shape[1]}x{frames[0].shape[0]})", detector.choice.name, f"{rate:.0f}", ""]
 
 if __name__ == "__main__":
     main()

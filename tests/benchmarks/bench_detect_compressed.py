@@ -39,7 +39,7 @@ from seedtrack.data.frames import open_frames
 from seedtrack.data.sparsespots import SparseSpotSpec, make_sparse_spots
 from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.data.video import write_video
-from seedtrack.pipeline import DetectionSettings, detect_clip
+from seedtrack.pipeline import DetectSettings, detect_clip
 from seedtrack.tracking.metrics import match_frame
 
 TOLERANCE_PX = 2.0
@@ -119,7 +119,7 @@ GIVEN_MIN_MASS = 200.0
 
 
 def seedtrack_points(path: Path, min_mass: float | None = None) -> tuple[list[np.ndarray], str]:
-    result = detect_clip(path, DetectionSettings(min_mass=min_mass), say=None)
+    result = detect_clip(path, DetectSettings(min_mass=min_mass), say=None)
     found = result.detections
     points = [np.column_stack((t["x"], t["y"])) for t in (found.frame(k) for k in range(len(found.frame_indices)))]
     spots = result.choice.spots

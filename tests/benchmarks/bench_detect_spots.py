@@ -1,6 +1,7 @@
 """Recall, precision and position error of the spot detector beside trackpy.locate and blob_log.
 
-Run as ``python tests/benchmarks/bench_detect_spots.py [FRAMES]``. Frames of Gaussian spots
+Run as ``python tests/benchmarks/bench_detect_spots.py [FRAMES] [--write-docs]`` (``--write-docs``
+also writes both tables into docs/detection.md, stamped: ``detect-spots``, ``detect-spots-settings``). Frames of Gaussian spots
 (:mod:`seedtrack.data.spotfield`: Poisson and read noise, 200 spots on 512 x 512 of which 20 in
 touching pairs and 10 out of focus rings) at signal-to-noise ratios 2 to 10, as in the ISBI
 particle tracking challenge; a found point is matched one to one to a true centre within 2 px.
@@ -31,7 +32,7 @@ al., Nature Methods 7, 377, 2010, maximum likelihood with a known Gaussian PSF a
 
 from __future__ import annotations
 
-import sys
+import argparse
 import time
 
 import cv2
@@ -43,6 +44,7 @@ from skimage.feature import blob_log
 from seedtrack.data.spotfield import SpotField, SpotFieldSpec, make_spot_field
 from seedtrack.detection.spots import detect_spots, fit_spot_settings
 from seedtrack.tracking.metrics import match_frame
+from tables import write_table
 
 TOLERANCE_PX = 2.0
 SNRS = (2.0, 3.0, 4.0, 6.0, 10.0)
@@ -130,8 +132,13 @@ def recall_at_precision(diameter: int, fields, precision: float) -> float:
     return 0.0
 
 
-def small_spots_table(frames: int) -> None:
+SPOT_HEADER = ["SNR", "detector", "recall", "precision", "RMS px", "singles px (bound)", "touching found", "rings found", "frames/s"]
+SETTINGS_HEADER = ["generator", "sigma", "bg", "SNR", "seedtrack recall / precision", "trackpy recall / precision", "trackpy minmass", "F1 ours / trackpy", "trackpy at our precision"]
+
+
+def small_spots_table(frames: int) -> list[list[str]]:
     print(f"\nOther settings: {frames} reporting frames each (seeds {REPORTING_SEED}..), trackpy tuned on seeds {TUNING_SEEDS.start}-{TUNING_SEEDS.stop - 1}")
+    rows = []
     print(f"{'generator':<11} {'sigma':>5} {'bg':>4} {'SNR':>4} {'seedtrack recall':>16} {'precision':>9} {'trackpy recall':>14} {'precision':>9} {'minmass':>8} {'F1 ours':>7} {'trackpy':>7} {'trackpy recall at our precision':>31}")
     for generator, sigma, background, snrs in SETTINGS:
         for snr in snrs:
@@ -142,11 +149,15 @@ def small_spots_table(frames: int) -> None:
             minmass = best_minmass(diameter, tuning)
             ours = score(seedtrack_points(images), fields)
             theirs = score(trackpy_points([image.astype(np.float64) for image in images], diameter, minmass), fields)
+            at_ours = recall_at_precision(diameter, fields, ours["precision"])
             print(
                 f"{generator:<11} {sigma:>5g} {background:>4g} {snr:>4g} {ours['recall']:>16.3f} {ours['precision']:>9.3f} "
                 f"{theirs['recall']:>14.3f} {theirs['precision']:>9.3f} {minmass:>8.3g} {ours['f1']:>7.3f} {theirs['f1']:>7.3f} "
-                f"{recall_at_precision(diameter, fields, ours['precision']):>31.3f}"
+                f"{at_ours:>31.3f}"
             )
+            rows.append([generator, f"{sigma:g}", f"{background:g}", f"{snr:g}", f"{ours['recall']:.3f} / {ours['precision']:.3f}",
+                         f"{theirs['recall']:.3f} / {theirs['precision']:.3f}", f"{minmass:.3g}", f"{ours['f1']:.2f} / {theirs['f1']:.2f}", f"{at_ours:.3f}"])
+    return rows
 
 
 def seedtrack_points(images: list[np.ndarray]) -> list[np.ndarray]:
@@ -217,7 +228,11 @@ def rate(run) -> float:
 def main() -> None:
     cv2.setNumThreads(1)
     trackpy.quiet()
-    frames = int(sys.argv[1]) if len(sys.argv) > 1 else 4
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("frames", nargs="?", type=int, default=4, help="reporting frames per setting (default 4)")
+    parser.add_argument("--write-docs", action="store_true", help="write both tables into docs/detection.md, stamped")
+    args = parser.parse_args()
+    frames, rows = args.frames, []
     print(f"Gaussian spots, sigma 1.5 px, 200 per 512x512 frame (20 touching, 10 rings), {frames} reporting frames per SNR; match within {TOLERANCE_PX:g} px")
     print(f"{'SNR':>4} {'detector':<22} {'recall':>7} {'precision':>9} {'RMS px':>7} {'singles':>7} {'touching':>8} {'rings':>6} {'frames/s':>9}")
     for snr in SNRS:
@@ -233,7 +248,8 @@ def main() -> None:
             f"trackpy (minmass {minmass:g})": lambda: trackpy_points(images, diameter, minmass),
             f"blob_log (thr {threshold:g})": lambda: blob_log_points(images, threshold),
         }
-        print(f"{snr:>4g} Cramer-Rao bound, single spots: RMS {cramer_rao_rms(spec):.3f} px (2-D)")
+        bound = cramer_rao_rms(spec)
+        print(f"{snr:>4g} Cramer-Rao bound, single spots: RMS {bound:.3f} px (2-D)")
         for name, run in runs.items():
             found = run()
             result = score(found, fields)
@@ -242,7 +258,12 @@ def main() -> None:
                 f"{snr:>4g} {name:<22} {result['recall']:>7.4f} {result['precision']:>9.4f} {result['rms']:>7.3f} {result['single_rms']:>7.3f} "
                 f"{result['touching']:>8.3f} {result['rings']:>6.3f} {fps:>9.1f}"
             )
-    small_spots_table(frames)
+            rows.append([f"{snr:g}", name, f"{result['recall']:.3f}", f"{result['precision']:.3f}", f"{result['rms']:.3f}",
+                         f"{result['single_rms']:.3f} ({bound:.3f})", f"{result['touching']:.2f}", f"{result['rings']:.2f}", f"{fps:.0f}"])
+    settings_rows = small_spots_table(frames)
+    if args.write_docs:
+        write_table("detection.md", "detect-spots", SPOT_HEADER, rows)
+        write_table("detection.md", "detect-spots-settings", SETTINGS_HEADER, settings_rows)
 
 
 if __name__ == "__main__":

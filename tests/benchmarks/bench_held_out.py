@@ -9,7 +9,8 @@ seeds) and PSMG with entry/exit and 10% occlusion. Random seeds are split: the t
 the printed table is for. One table: strict trajectory merit (the paper's measure at 0.5 px:
 one track follows the point over every frame it is measured) and IDF1 per tracker, mean over
 the clips (with ``--errors``: the paper's track error and link error, and the tracks made per
-clip); then, per clip, seedtrack's fastest link over the fastest true speed.
+clip); then, per clip, seedtrack's fastest link over the fastest true speed. ``--write-docs``
+also writes the table into docs/benchmarks.md (table ``held-out``, or ``held-out-errors``).
 
 Trackers: seedtrack as ``seedtrack track`` runs with no options; seedtrack given the speed
 limit the peers get; the previous default, which chose smooth or random motion on a threshold; trackpy (plain and with ``NearestVelocityPredict``), laptrack (gap
@@ -45,6 +46,7 @@ from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.trackers import run_tracker
 from seedtrack.tracking.tracks import NO_MEASUREMENT
+from tables import write_table
 
 TOLERANCE = 0.5
 SEED_SETS = {"tuning": 0, "reporting": 1000}
@@ -160,6 +162,7 @@ def main() -> None:
     parser.add_argument("--only", default="", help="scenes whose label contains this")
     parser.add_argument("--trackers", default="", help="comma-separated tracker names (default all)")
     parser.add_argument("--errors", action="store_true", help="cells: track error / link error (tracks per clip)")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/benchmarks.md, stamped")
     args = parser.parse_args()
     names = [n for n in args.trackers.split(",") if n] or list(TRACKERS)
     seeds = range(SEED_SETS[args.seeds], SEED_SETS[args.seeds] + args.clips)
@@ -167,6 +170,7 @@ def main() -> None:
     print(f"{args.seeds} seeds {seeds.start}..{seeds.stop - 1}; cells: {measures}, mean of {args.clips} clips; - the peer gave up; * trackpy's adaptive search (stop 0.1, step 0.95 of the range) after it gave up")
     print("| scene | limit | " + " | ".join(names) + " |")
     print("| --- | --- |" + " --- |" * len(names))
+    rows = []
     for scene in SCENES:
         if args.only not in scene.label:
             continue
@@ -198,7 +202,10 @@ def main() -> None:
             else:
                 cells.append(f"{statistics.mean(merit):.3f} / {statistics.mean(idf1):.3f}{mark}")
             print(f"  {scene.label} {name}: {cells[-1]} ({time.perf_counter() - started:.1f} s)", file=sys.stderr, flush=True)
+        rows.append([scene.label, f"{scene.limit:g}", *cells])
         print(f"| {scene.label} | {scene.limit:g} | " + " | ".join(cells) + " |", flush=True)
+    if args.write_docs:
+        write_table("benchmarks.md", "held-out-errors" if args.errors else "held-out", ["scene", "limit", *names], rows)
     print("\nseedtrack with no options: its fastest link against the fastest true speed (measured points, per clip)")
     for scene in SCENES:
         if args.only not in scene.label:

@@ -7,7 +7,8 @@ motion, then tracks open GOA-updown); trackpy (``link``, memory 0 and 3) and lap
 over 2 frames) are given the speed limit a user who knows the data would choose: 4 sigma plus the
 drift for walkers, the generator's speed limit for PSMG, 1.1 x the rim speed for the dish. Prints
 the median IDF1 and link error (tolerance 1 px) and the median CPU seconds per run (medians over
-runs) of each tracker on each scene.
+runs) of each tracker on each scene; ``--write-docs`` also writes the table into
+docs/benchmarks.md (table ``motion``), stamped.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.tracks import Tracks
+from tables import write_table
 
 Scene = tuple[list[np.ndarray], Tracks, float]
 SEED_SETS = {"tuning": 0, "reporting": 1000}
@@ -109,10 +111,12 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--seeds", choices=tuple(SEED_SETS), default="reporting")
     parser.add_argument("--only", default="", help="scenes whose name contains this")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/benchmarks.md, stamped")
     args = parser.parse_args()
     first = SEED_SETS[args.seeds]
     print(f"| scene | tracker | IDF1 | link error | CPU s |  (medians of {args.runs} runs, {args.seeds} seeds {first}..{first + args.runs - 1})")
     print("|---|---|---|---|---|")
+    rows = []
     for scene_name, make in SCENES.items():
         if args.only not in scene_name:
             continue
@@ -120,14 +124,13 @@ def main() -> None:
         for tracker_name, track in TRACKERS.items():
             (idf1, link), seconds = measure_runs(track, scenes, (lambda tracks, truth: clear_mot(tracks, truth, 1.0).idf1, lambda tracks, truth: score_tracks(tracks, truth, 1.0).link_error))
             if not idf1:
-                print(f"| {scene_name} | {tracker_name} | failed | failed | |")
-                continue
-            failed = f" ({args.runs - len(idf1)} failed)" if len(idf1) < args.runs else ""
-            print(
-                f"| {scene_name} | {tracker_name} | {statistics.median(idf1):.3f}{failed} | "
-                f"{statistics.median(link):.4f} | {statistics.median(seconds):.2f} |",
-                flush=True,
-            )
+                rows.append([scene_name, tracker_name, "failed", "failed", ""])
+            else:
+                failed = f" ({args.runs - len(idf1)} failed)" if len(idf1) < args.runs else ""
+                rows.append([scene_name, tracker_name, f"{statistics.median(idf1):.3f}{failed}", f"{statistics.median(link):.4f}", f"{statistics.median(seconds):.2f}"])
+            print("| " + " | ".join(rows[-1]) + " |", flush=True)
+    if args.write_docs:
+        write_table("benchmarks.md", "motion", ["scene", "tracker", "IDF1", "link error", "CPU s"], rows)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,8 @@ motion, the dish, PSMG with entry/exit) and ``bench_motion.py`` (random walkers)
 - entry-exit: the fastest link over the fastest true speed, and IDF1 (0.5 px) against
   seedtrack given each clip's fastest true speed as ``--max-speed``.
 
-Ends with the checklist the README quotes.
+Ends with the checklist docs/benchmarks.md quotes; ``--write-docs`` writes it there (table
+``must-show``), with the smooth cells' table (``must-show-smooth``) when the psmg part ran.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ from seedtrack.data.trackfile import read_tracks
 from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.metrics import UNMATCHED, match_points, score_tracks, true_track_owners
 from seedtrack.tracking.tracks import Tracks
+from tables import write_table
 
 FIRST_REPORTING = 1000
 README_CLIPS = 3
@@ -54,6 +56,8 @@ DISH_D_MAX = (None, 45.0, 60.0, 100.0, 200.0)
 # to it, pixels (the outside check's example passed 2.2 px apart).
 NEAR = 3.0
 CHECKLIST: list[tuple[str, str, str]] = []
+PSMG_ROWS: list[list[str]] = []
+PSMG_HEADER = ["cell", "seedtrack", "trackpy predict", "ipan", "vs trackpy predict", "vs ipan", "IPAN's slowest clip s"]
 
 
 def check(claim: str, figure: str, passed: bool, on_readme_clips: bool | None = None) -> None:
@@ -122,8 +126,8 @@ def first_break(trajectory: int, tracks: Tracks, truth: Tracks, owner: np.ndarra
 
 def psmg_part(seeds: range) -> None:
     print(f"\n## PSMG-like smooth cells: strict merit, mean of {len(seeds)} clips (first {README_CLIPS}); won/lost/tied clips and sign test p against each peer")
-    print("| cell | seedtrack | trackpy predict | ipan | vs trackpy predict | vs ipan | IPAN's slowest clip s |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("| " + " | ".join(PSMG_HEADER) + " |")
+    print("| --- " * len(PSMG_HEADER) + "|")
     # Per cell, how seedtrack's wrong trajectories first went wrong: all of them, and those of
     # the clips it lost to trackpy that trackpy followed.
     kinds: dict[str, dict[str, dict[str, list[float]]]] = {"all": {}, "lost": {}}
@@ -148,7 +152,8 @@ def psmg_part(seeds: range) -> None:
                     ours.append((tracks, owner))
         means = {name: (statistics.mean(v), statistics.mean(v[:README_CLIPS])) for name, v in merit.items()}
         cells = " | ".join(f"{a:.3f} ({b:.3f})" for a, b in means.values())
-        print(f"| {scene.label} | {cells} | {duel(merit['seedtrack'], merit['trackpy predict'])} | {duel(merit['seedtrack'], merit['ipan'])} | {slowest:.1f} |", flush=True)
+        PSMG_ROWS.append([scene.label, *(f"{a:.3f} ({b:.3f})" for a, b in means.values()), duel(merit["seedtrack"], merit["trackpy predict"]), duel(merit["seedtrack"], merit["ipan"]), f"{slowest:.1f}"])
+        print("| " + " | ".join(PSMG_ROWS[-1]) + " |", flush=True)
         wins = [means["seedtrack"][k] >= max(means["trackpy predict"][k], means["ipan"][k]) for k in (0, 1)]
         check(f"PSMG {scene.label}: strict merit >= trackpy predict's and IPAN's", cells.replace(" | ", ", "), *wins)
         for clip, (frames, truth) in enumerate(clips):
@@ -291,6 +296,7 @@ def main() -> None:
     parser.add_argument("--clips", type=int, default=20, help="reporting clips per scene (default 20)")
     parser.add_argument("--demo-clips", type=int, default=3, help="reporting clips through `seedtrack demo` per speed limit (default 3)")
     parser.add_argument("--only", default="", choices=("", *PARTS), help="one part (default all)")
+    parser.add_argument("--write-docs", action="store_true", help="write the checklist (and the smooth cells) into docs/benchmarks.md, stamped")
     args = parser.parse_args()
     seeds = range(FIRST_REPORTING, FIRST_REPORTING + args.clips)
     started = time.perf_counter()
@@ -310,6 +316,10 @@ def main() -> None:
     print("| --- | --- | --- |")
     for claim, figure, passed in CHECKLIST:
         print(f"| {claim} | {figure} | {passed} |")
+    if args.write_docs:
+        write_table("benchmarks.md", "must-show", [f"must-show ({time.perf_counter() - started:.0f} s wall)", f"{args.clips} clips (first {README_CLIPS})", "verdict"], [list(row) for row in CHECKLIST])
+        if PSMG_ROWS:
+            write_table("benchmarks.md", "must-show-smooth", PSMG_HEADER, PSMG_ROWS)
 
 
 if __name__ == "__main__":

@@ -1,11 +1,11 @@
-"""Rerun the paper's PSMG sweeps under both protocols and rewrite the README's tables (not run in CI).
+"""Rerun the paper's PSMG sweeps under both protocols and rewrite docs/paper.md's tables (not run in CI).
 
-    python tests/benchmarks/bench_paper_tables.py [--runs N] [--table-runs N] [--jobs N] [--out DIR] [--readme PATH]
+    python tests/benchmarks/bench_paper_tables.py [--runs N] [--table-runs N] [--jobs N] [--out DIR] [--readme PAGE]
 
 Runs ``seedtrack experiment`` for models, density, velocity, occlusion and dmax under the paper's
 protocol (first links given) and self-initialised, and ipan-table self-initialised (IPAN's own
 protocol), writing each experiment's CSVs and plot to DIR (default tests/benchmarks/results). It
-then rewrites the part of the README between the ``paper-tables`` markers: one table per sweep and
+then rewrites the part of docs/paper.md between the ``paper-tables`` markers: one table per sweep and
 protocol, the IPAN table and the paper's findings one by one, each verdict decided by the rule
 its row states. ``--readme -`` prints the markdown instead. It ends by printing the time taken.
 """
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -22,11 +23,13 @@ import pandas as pd
 
 from seedtrack.cli import main
 from seedtrack.experiments import PROTOCOLS, SWEEP_PEERS
+from tables import provenance
 
 ROOT = Path(__file__).resolve().parents[2]
 BEGIN = "<!-- paper-tables: written by tests/benchmarks/bench_paper_tables.py, do not edit by hand -->"
 END = "<!-- end of paper-tables -->"
 SWEEPS = ("models", "density", "velocity", "occlusion", "dmax")
+PLOTTED = ("density", "velocity", "occlusion", "dmax")
 PROTOCOL_NAMES = {"given": "first links given (the paper's protocol)", "self": "self-initialised"}
 COLUMN = {"models": "trajectories", "density": "trajectories", "velocity": "mean_speed", "occlusion": "occlusion",
           "dmax": "d_max_factor"}
@@ -94,9 +97,9 @@ def sweep_tables(tables: dict, runs: int) -> list[str]:
         for protocol in PROTOCOLS:
             table = tables[(name, protocol)]
             xs = sorted({x for by_x in table.values() for x in by_x})
-            lines += [f"#### {title}: {PROTOCOL_NAMES[protocol]} ({runs} runs)", ""]
-            if name in ("density", "velocity", "occlusion", "dmax"):
-                lines += [f"![{name} {protocol}](tests/benchmarks/results/{name}-{protocol}.png)", ""]
+            lines += [f"### {title}: {PROTOCOL_NAMES[protocol]} ({runs} runs)", ""]
+            if name in PLOTTED:
+                lines += [f"![{name} {protocol}](pictures/paper/{name}-{protocol}.png)", ""]
             header = [first.format(xs[0])] + [rest.format(x) for x in xs[1:]]
             lines.append("| tracker | " + " | ".join(header) + " |")
             lines.append("| --- " * (len(xs) + 1) + "|")
@@ -110,7 +113,7 @@ def ipan_table(out: Path, runs: int) -> list[str]:
     frame = pd.read_csv(out / "ipan-table-self-summary.csv")
     counts = sorted(frame["trajectories"].unique())
     lines = [
-        f"#### IPAN's published table, with the default and the published scheme on the same data: self-initialised ({runs} runs)",
+        f"### IPAN's published table, with the default and the published scheme on the same data: self-initialised ({runs} runs)",
         "",
         "Strict trajectory merit (%, 100 x (1 - track error)); PSMG without entry or exit, 20 frames, 200 x 200 px,",
         "v_max 2v, IPAN with delta_max 0.6 and N_ver 2. The sources do not give the occlusion probability of",
@@ -301,7 +304,8 @@ def findings(tables: dict) -> list[str]:
 def markdown(out: Path, runs: int, table_runs: int, seconds: float | None) -> str:
     tables = load(out)
     limits = ", ".join(f"{name} up to {limit} points" for name, limit in SWEEP_PEERS.items() if limit is not None)
-    took = f" in {seconds / 60:.0f} minutes on the shared 2-core machine" if seconds is not None else ""
+    # A run stamps the commit and the machine it measured on; --tables-only reformats earlier runs.
+    took = f" in {seconds / 60:.0f} minutes at {provenance()}" if seconds is not None else ""
     lines = [
         BEGIN,
         "",
@@ -310,7 +314,7 @@ def markdown(out: Path, runs: int, table_runs: int, seconds: float | None) -> st
         f"{runs} runs per cell under each protocol (the paper ran 100: intervals here are wide); the IPAN table {table_runs} runs",
         f"per cell; the slow peers only on the smaller scenes ({limits}; \"not run\" elsewhere).",
         "",
-        "### The paper's findings, one by one",
+        "## The paper's findings, one by one",
         "",
         *findings(tables),
         *sweep_tables(tables, runs),
@@ -320,7 +324,16 @@ def markdown(out: Path, runs: int, table_runs: int, seconds: float | None) -> st
     return "\n".join(lines)
 
 
-def rewrite(readme: Path, text: str) -> None:
+def rewrite(readme: Path, text: str, out: Path) -> None:
+    """Replace the paper tables of page ``readme`` with ``text``, and copy the sweeps' plots it
+    shows from ``out`` to the page's pictures/paper/ (the docs site serves only docs/)."""
+    pictures = readme.parent / "pictures" / "paper"
+    pictures.mkdir(parents=True, exist_ok=True)
+    for name in PLOTTED:
+        for protocol in PROTOCOLS:
+            plot = out / f"{name}-{protocol}.png"
+            if plot.exists():  # --tables-only on a fresh checkout: the page's own copies stand
+                shutil.copy2(plot, pictures / plot.name)
     old = readme.read_text()
     start, end = old.index(BEGIN), old.index(END) + len(END)
     temporary = readme.with_suffix(".md.tmp")
@@ -334,7 +347,7 @@ def run() -> int:
     parser.add_argument("--table-runs", type=int, default=10, help="runs per cell of the IPAN table (default 10)")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=ROOT / "tests" / "benchmarks" / "results")
-    parser.add_argument("--readme", default=str(ROOT / "README.md"), help="README to rewrite, or - to print")
+    parser.add_argument("--readme", default=str(ROOT / "docs" / "paper.md"), help="page to rewrite (default docs/paper.md), or - to print")
     parser.add_argument("--tables-only", action="store_true", help="rewrite from the summaries in --out without running")
     args = parser.parse_args()
     start = time.perf_counter()
@@ -346,7 +359,7 @@ def run() -> int:
     if args.readme == "-":
         print(text)
     else:
-        rewrite(Path(args.readme), text)
+        rewrite(Path(args.readme), text, args.out)
         print(f"rewrote the paper tables of {args.readme}")
     print(f"took {time.perf_counter() - start:.0f} s")
     return 0
