@@ -1,6 +1,6 @@
 """The measures papers report (HOTA, the ISBI 2012 challenge's) for seedtrack and its peers.
 
-    python tests/benchmarks/bench_paper_metrics.py [--seeds reporting|tuning] [--clips N] [--docs PATH]
+    python tests/benchmarks/bench_paper_metrics.py [--seeds reporting|tuning] [--clips N] [--write-docs]
 
 Held-out scenes (:mod:`seedtrack.data.held_out`, no default was tuned on them; random seeds
 1000, 1001, ... of the reporting set) and PSMG with entry and exit and 10% occlusion, each
@@ -9,8 +9,8 @@ laptrack at the search range of bench_held_out.py (twice the mean speed; trackpy
 where points are missed; where it gives up, SubnetOversizeException, its documented remedy,
 adaptive search, marked *). Scored by ``evaluate``'s measures at 3 px: HOTA with DetA and AssA,
 IDF1, the challenge's alpha with beta, JSC with JSC_theta, and RMSE; with the median seconds a
-clip of linking. Means over the clips; the table is printed and written into docs/metrics.md
-between its markers (``--docs -``: printed only).
+clip of linking. Means over the clips; the table is printed, and with ``--write-docs`` written
+into docs/metrics.md, stamped.
 """
 
 from __future__ import annotations
@@ -19,17 +19,14 @@ import argparse
 import statistics
 import sys
 import time
-from pathlib import Path
 
 from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
 from seedtrack.tracking.evaluation import evaluate_tracks
 from seedtrack.tracking.linking import link_goa
+from tables import markdown_table, write_table
 
-ROOT = Path(__file__).resolve().parents[2]
-BEGIN = "<!-- paper-metrics: written by tests/benchmarks/bench_paper_metrics.py, do not edit by hand -->"
-END = "<!-- end of paper-metrics -->"
 TOLERANCE = 3.0
 SEED_SETS = {"tuning": 0, "reporting": 1000}
 
@@ -76,51 +73,48 @@ TRACKERS = {
     "laptrack": lambda frames, limit, missed: PEERS["laptrack"](frames, limit, 0),
 }
 COLUMNS = ("hota", "det_a", "ass_a", "idf1", "isbi_alpha", "isbi_beta", "isbi_jsc", "isbi_jsc_theta", "isbi_rmse_px")
-HEADER = "| scene | tracker | HOTA | DetA | AssA | IDF1 | alpha | beta | JSC | JSC_theta | RMSE px | s/clip |"
+HEADER = ["scene", "tracker", "HOTA", "DetA", "AssA", "IDF1", "alpha", "beta", "JSC", "JSC_theta", "RMSE px", "s/clip"]
 
 
-def table(seeds: range) -> str:
-    lines = [HEADER, "|" + " --- |" * 12]
+def table(seeds: range) -> list[list[str]]:
+    rows = []
     for label, (draw, limit, missed) in SCENES.items():
         clips = [draw(seed) for seed in seeds]
         for name, tracker in TRACKERS.items():
             ADAPTIVE.clear()
-            rows, seconds = [], []
+            scores, seconds = [], []
             try:
                 for frames, truth in clips:
                     started = time.perf_counter()
                     tracks = tracker(frames, limit, missed)
                     seconds.append(time.perf_counter() - started)
-                    rows.append(evaluate_tracks(tracks, truth, TOLERANCE)[0])
+                    scores.append(evaluate_tracks(tracks, truth, TOLERANCE)[0])
             except PeerFailure:
-                lines.append(f"| {label} | {name} |" + " gave up |" * (len(COLUMNS) + 1))
+                rows.append([label, name, *["gave up"] * (len(COLUMNS) + 1)])
                 continue
-            cells = [f"{statistics.mean(getattr(row, column) for row in rows):.3f}" for column in COLUMNS]
             mark = "*" if ADAPTIVE else ""
-            lines.append(f"| {label} | {name}{mark} | " + " | ".join(cells) + f" | {statistics.median(seconds):.2f} |")
+            cells = [f"{statistics.mean(getattr(score, column) for score in scores):.3f}" for column in COLUMNS]
+            rows.append([label, name + mark, *cells, f"{statistics.median(seconds):.2f}"])
             print(f"  {label} {name}{mark}: {sum(seconds):.1f} s", file=sys.stderr, flush=True)
-    return "\n".join(lines)
+    return rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", choices=tuple(SEED_SETS), default="reporting")
     parser.add_argument("--clips", type=int, default=3)
-    parser.add_argument("--docs", default=str(ROOT / "docs" / "metrics.md"), help="page to write the table into, or - to print it only")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/metrics.md, stamped")
     args = parser.parse_args()
     seeds = range(SEED_SETS[args.seeds], SEED_SETS[args.seeds] + args.clips)
-    text = (
+    print(
         f"{args.seeds} seeds {seeds.start}..{seeds.stop - 1}, mean of {args.clips} clips, matching distance {TOLERANCE:g} px; "
         "search range 2 v for the peers (v the mean speed), seedtrack with no options; * trackpy's adaptive search "
-        "(stop 0.1, step 0.95 of the range) after it gave up; s/clip: median seconds of linking a clip, one run on the "
-        "shared 2-core machine.\n\n" + table(seeds)
+        "(stop 0.1, step 0.95 of the range) after it gave up; s/clip: median seconds of linking a clip"
     )
-    print(text)
-    if args.docs != "-":
-        page = Path(args.docs)
-        content = page.read_text()
-        start, end = content.index(BEGIN) + len(BEGIN), content.index(END)
-        page.write_text(content[:start] + "\n" + text + "\n" + content[end:])
+    rows = table(seeds)
+    print(markdown_table(HEADER, rows))
+    if args.write_docs:
+        write_table("metrics.md", "paper-metrics", HEADER, rows)
 
 
 if __name__ == "__main__":
