@@ -60,3 +60,13 @@ def test_the_truth_scores_perfectly_and_the_gate_is_strict():
     shifted = _tracks([(0, f, f, 5) for f in range(4)] + [(1, f, 20 + f, 5) for f in range(3)])
     scores = challenge_scores(shifted, TRUTH, gate=5.0)
     assert (scores.alpha, scores.jsc, scores.paired_tracks) == (0.0, 0.0, 0)
+
+
+@pytest.mark.parametrize("gate", [1e-300, 1e300, 1.7e308])
+def test_any_finite_gate_gives_measures_in_range(gate):
+    from seedtrack.tracking.hota import hota
+
+    result = _tracks([(7, 0, 0, 3), (7, 1, 1, 4), (8, 1, 21, 0)])
+    scores = challenge_scores(result, TRUTH, gate)
+    assert all(0.0 <= value <= 1.0 for value in (scores.alpha, scores.beta, scores.jsc, scores.jsc_theta))
+    assert 0.0 <= hota(result, TRUTH, gate).hota <= 1.0

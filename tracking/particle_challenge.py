@@ -74,7 +74,8 @@ def challenge_scores(result: Tracks, truth: Tracks, gate: float = 5.0) -> Challe
     n_true = np.bincount(truth.point_track, minlength=truth.n_tracks).astype(float)
     n_found = np.bincount(result.point_track, minlength=result.n_tracks).astype(float)
     # Only track pairs with a point pair nearer than the gate may be paired; for them the
-    # distance is gate * (points not in a common frame + far common points) + near distances.
+    # distance is gate * (points not in a common frame + far common points) + near distances,
+    # counted here in units of the gate, so that any finite gate (1e300 too) keeps it finite.
     pairs = near_pairs(result, truth, gate)
     near = pairs.distance < gate
     code = pairs.truth_track[near] * result.n_tracks + pairs.result_track[near]
@@ -84,7 +85,7 @@ def challenge_scores(result: Tracks, truth: Tracks, gate: float = 5.0) -> Challe
     squared = np.bincount(pair_of, pairs.distance[near] ** 2, track_pair.size)
     t_track, r_track = np.divmod(track_pair, result.n_tracks)
     common = common_frames(result, truth, t_track, r_track)
-    pair_cost = gate * (n_true[t_track] + n_found[r_track] - common - within) + summed
+    pair_cost = (n_true[t_track] + n_found[r_track] - common - within) + summed / gate
 
     # Rows: true tracks with points; columns: result tracks, then one dummy per such true track.
     # Every row takes exactly one edge, so adding 1 to all (the graph needs weights > 0) keeps
@@ -94,18 +95,18 @@ def challenge_scores(result: Tracks, truth: Tracks, gate: float = 5.0) -> Challe
     row_of[real] = np.arange(real.size)
     dummy = result.n_tracks + np.arange(real.size)
     graph = csr_matrix(
-        (np.concatenate([pair_cost, gate * n_true[real]]) + 1.0, (np.concatenate([row_of[t_track], np.arange(real.size)]), np.concatenate([r_track, dummy]))),
+        (np.concatenate([pair_cost, n_true[real]]) + 1.0, (np.concatenate([row_of[t_track], np.arange(real.size)]), np.concatenate([r_track, dummy]))),
         shape=(real.size, result.n_tracks + real.size),
     )
     rows, cols = min_weight_full_bipartite_matching(graph) if real.size else (np.empty(0, int), np.empty(0, int))
     paired = cols < result.n_tracks
     chosen = np.searchsorted(track_pair, real[rows[paired]] * result.n_tracks + cols[paired])
 
-    worst = gate * n_true.sum()
-    distance = pair_cost[chosen].sum() + gate * n_true[real[rows[~paired]]].sum()
+    worst = n_true.sum()
+    distance = pair_cost[chosen].sum() + n_true[real[rows[~paired]]].sum()
     unpaired_found = np.ones(result.n_tracks, bool)
     unpaired_found[cols[paired]] = False
-    spurious = gate * n_found[unpaired_found].sum()
+    spurious = n_found[unpaired_found].sum()
     tp = within[chosen].sum()
     fn = n_true.sum() - tp
     fp = n_found.sum() - tp

@@ -44,17 +44,18 @@ def near_pairs(result: Tracks, truth: Tracks, distance: float) -> PointPairs:
     >>> near_pairs(a, a, 0.5).distance
     array([0., 0.])
     """
-    # Frames as a third coordinate, spaced far beyond ``distance``, so that one search finds
-    # the pairs of every frame and none across frames.
-    spacing = 4.0 * distance + 1.0
-    lifted = []
-    for tracks in (truth, result):
-        frame = tracks.point_column + tracks.first_frame
-        lifted.append(np.column_stack((tracks.point_xy, frame * spacing)))
-    if len(lifted[0]) == 0 or len(lifted[1]) == 0:
+    if truth.point_track.size == 0 or result.point_track.size == 0:
         empty = np.empty(0, np.int64)
         return PointPairs(empty, empty, empty, empty, empty, np.empty(0))
-    found = cKDTree(lifted[0]).sparse_distance_matrix(cKDTree(lifted[1]), distance, output_type="ndarray")
+    # No two points are farther apart than the diagonal of their bounding box: a longer distance
+    # finds the same pairs, and keeps the numbers below finite (a tolerance of 1e300 is valid).
+    xy = np.concatenate((truth.point_xy, result.point_xy))
+    reach = min(distance, float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0)))) + 1.0)
+    # Frames as a third coordinate, spaced far beyond the reach, so that one search finds the
+    # pairs of every frame and none across frames.
+    spacing = 4.0 * reach + 1.0
+    lifted = [np.column_stack((tracks.point_xy, (tracks.point_column + tracks.first_frame) * spacing)) for tracks in (truth, result)]
+    found = cKDTree(lifted[0]).sparse_distance_matrix(cKDTree(lifted[1]), reach, output_type="ndarray")
     t, r = found["i"].astype(np.int64), found["j"].astype(np.int64)
     frame = truth.point_column[t] + truth.first_frame
     order = np.lexsort((r, t, frame))
