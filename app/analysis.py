@@ -9,10 +9,9 @@ a DataFrame in the units given: lengths are pixels times ``pixel_size``, times f
 
 from __future__ import annotations
 
-import math
-
 import pandas as pd
 
+from seedtrack.data.calibration import Calibration
 from seedtrack.tracking.analysis import drift_table, msd_table, velocity_table, without_drift
 from seedtrack.tracking.tracks import Tracks
 
@@ -106,6 +105,6 @@ def velocity(tracks: pd.DataFrame | PathLike | Tracks, pixel_size: float = 1.0, 
 
 
 def _check_units(pixel_size: float, frame_interval: float) -> None:
-    for name, value in (("pixel_size", pixel_size), ("frame_interval", frame_interval)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive number, got {value!r}")
+    if not all(isinstance(value, (int, float)) for value in (pixel_size, frame_interval)):
+        raise ValueError(f"pixel_size and frame_interval must be numbers, got {pixel_size!r} and {frame_interval!r}")
+    Calibration(float(pixel_size), "length", float(frame_interval), "time")

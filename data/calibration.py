@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, replace
 
 PIXEL, FRAME = "pixel", "frame"
+SMALLEST, LARGEST = 1e-12, 1e12
 
 
 @dataclass(frozen=True)
@@ -44,8 +45,9 @@ class Calibration:
     def __post_init__(self) -> None:
         for name in ("pixel_size", "frame_interval"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+            # Beyond these, squared lengths (an MSD) of pixel coordinates leave the floats.
+            if not (math.isfinite(value) and SMALLEST <= value <= LARGEST):
+                raise ValueError(f"{name} must be a positive number from {SMALLEST:g} to {LARGEST:g}, got {value!r}")
 
     @property
     def calibrated(self) -> bool:

@@ -40,6 +40,13 @@ def tiff_calibration(path: str | os.PathLike) -> Calibration:
             tags = dict(image.tag_v2)
     except (OSError, ValueError):
         return Calibration()
+    try:
+        return _calibration(tags)
+    except ValueError:  # a size or interval no clip has (1e-20 um a pixel): no calibration
+        return Calibration()
+
+
+def _calibration(tags: dict) -> Calibration:
     description = _imagej_fields(str(tags.get(_DESCRIPTION, "")))
     units = Calibration()
     resolution = float(tags.get(_X_RESOLUTION, 0) or 0)

@@ -162,3 +162,13 @@ def test_a_videos_frame_rate_gives_the_frame_interval(tmp_path):
     assert clip_calibration(tmp_path / "clip.mp4") == Calibration(1.0, "pixel", 0.05, "s")
     _imagej_tiff(tmp_path / "clip.tif")
     assert clip_calibration(tmp_path / "clip.tif") == Calibration(0.25, "µm", 0.5, "s")
+
+
+def test_sizes_no_clip_has_are_refused_in_one_line(tmp_path, capsys):
+    write_tracks(tmp_path / "t.csv", _pixel_tracks())
+    assert main(["analyze", str(tmp_path / "t.csv"), "--out", str(tmp_path / "a"), "--pixel-size", "1e300"]) == 2
+    assert "--pixel-size must be a positive number from 1e-12 to 1e+12" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
+    (tmp_path / "tiny.xml").write_text(_fake_tracks(1.0).replace('pixelwidth="1.0"', 'pixelwidth="1e-20"'))
+    with pytest.raises(DataError, match=r"tiny\.xml: line 4: pixel_size must be a positive number"):
+        read_calibration(tmp_path / "tiny.xml")

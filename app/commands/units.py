@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from seedtrack.data.calibration import Calibration
+from seedtrack.data.calibration import LARGEST, SMALLEST, Calibration
 
 from ..errors import UsageError
 
@@ -31,4 +31,4 @@ def calibration_from(args: argparse.Namespace, read: Calibration | None = None) 
         return (read or Calibration()).overridden(args.pixel_size, args.space_unit, args.frame_interval, args.time_unit)
     except ValueError as error:
         option = "--pixel-size" if "pixel_size" in str(error) else "--frame-interval"
-        raise UsageError(f"{option} must be a positive number") from None
+        raise UsageError(f"{option} must be a positive number from {SMALLEST:g} to {LARGEST:g}") from None

@@ -129,10 +129,13 @@ def calibration(path) -> Calibration:
     metadata = _read_memory(path)["metadata"]
     time, x_axis, _ = _axes(path, metadata)
     units = Calibration()
-    if x_axis.scale and x_axis.scaled_unit:
-        units = units.overridden(pixel_size=float(x_axis.scale), space_unit=str(x_axis.scaled_unit))
-    if time.scale and time.scaled_unit:
-        units = units.overridden(frame_interval=float(time.scale), time_unit=str(time.scaled_unit))
+    try:
+        if x_axis.scale and x_axis.scaled_unit:
+            units = units.overridden(pixel_size=float(x_axis.scale), space_unit=str(x_axis.scaled_unit))
+        if time.scale and time.scaled_unit:
+            units = units.overridden(frame_interval=float(time.scale), time_unit=str(time.scaled_unit))
+    except ValueError as error:
+        raise DataError(path, f"GEFF axis scale: {error}") from None
     return units
 
 

@@ -89,7 +89,10 @@ def calibration(path) -> Calibration:
     space_unit = model.attrib.get("spatialunits", PIXEL) or PIXEL
     if _is_pixels(space_unit):
         space_unit = PIXEL
-    return Calibration(width, space_unit, interval if interval > 0 else 1.0, time_unit)
+    try:
+        return Calibration(width, space_unit, interval if interval > 0 else 1.0, time_unit)
+    except ValueError as error:
+        raise DataError(path, f"line {model.line}: {error}") from None
 
 
 def check_pixels(path, line: int, unit: str) -> None:
