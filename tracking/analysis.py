@@ -61,7 +61,7 @@ def msd_table(tracks: Tracks, pixel_size: float = 1.0, frame_interval: float = 1
 
     Over all tracks every point pair weighs the same. trackpy's ``emsd`` weighs each track's
     MSD by its effective number of independent displacements instead: the same on tracks of
-    one length, apart on short tracks of unequal lengths (docs/analysis.md has the figures).
+    one length, apart on many short tracks of unequal lengths.
 
     Parameters
     ----------
