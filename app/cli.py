@@ -36,6 +36,7 @@ COMMANDS = {
     "render": "draw tracks over the clip: an MP4, a GIF, a PNG or a folder of PNGs",
     "compare": "draw two track sets over the clip, where they disagree in a warning colour",
     "evaluate": "score tracks against ground truth",
+    "analyze": "MSD, drift and velocity of tracks, as tables and plots",
     "correct": "apply hand edits to tracks, to make ground truth",
     "review": "draw track ids on frames, to write corrections from",
     "annotate": "make or fix ground truth by pointing, in a local web page",

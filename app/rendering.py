@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from seedtrack.data.atomic import check_target
+from seedtrack.data.calibration import Calibration
+from seedtrack.data.clip_units import tiff_calibration
 from seedtrack.data.errors import DataError
 from seedtrack.data.frames import FrameSource, open_frames
 from seedtrack.tracking.tracks import Tracks
@@ -17,6 +19,7 @@ from .drawing import FalseDetections, TrackLayer, View, annotate_frames, summary
 from .error_plot import write_png
 from .errors import OptionError
 from .frame_output import output_kind, write_frames
+from .scale_bar import with_scale_bar
 from .settings import RenderSettings
 from .wording import counted
 
@@ -139,10 +142,12 @@ def draw(
     summary: Path | None = None,
     detections: dict[str, np.ndarray] | None = None,
     detections_name=None,
+    units: Calibration | None = None,
 ) -> str:
     """Draw ``tracks`` over ``clip`` into ``out``, of ``kind`` (see :func:`output_checked`), and
     ``summary``, as the settings say; ``tracks_name`` and ``detections_name`` name them in
-    errors. Detections (columns frame, x, y) that no track holds are crossed out.
+    errors. Detections (columns frame, x, y) that no track holds are crossed out. A scale bar is
+    drawn when ``units`` (by default the clip's own: a calibrated TIFF's) has a length unit.
 
     Returns
     -------
@@ -151,18 +156,21 @@ def draw(
     """
     if summary is not None and Path(summary).suffix.lower() != ".png":
         raise OptionError(f"summary must be a .png file, got {summary}", "summary")
+    units = units if units is not None else tiff_calibration(clip)
     with open_range(clip, settings, kind, [(tracks_name, tracks)]) as source:
         view = View.of(source.size, settings.crop, settings.scale)
+        enlarged = view.size[0] / (view.box[2] - view.box[0])
         layer = TrackLayer(tracks, view, trail=settings.trail, labels=settings.labels)
         if summary is not None:
             _, first = next(open_frames(clip, start=settings.start, end=settings.start + 1).shown())
-            write_png(summary, summary_picture(first, view, [layer], counted(tracks.n_tracks, "track")))
+            picture = summary_picture(first, view, [layer], counted(tracks.n_tracks, "track"))
+            write_png(summary, next(with_scale_bar([(0, picture)], units, enlarged))[1])
         if kind is None:
             return f"wrote {summary}"
         false = None
         if detections is not None:
             check_fits(detections_name, detections["frame"], detections["x"], detections["y"], source, clip, "detections")
             false = FalseDetections(detections["frame"], detections["x"], detections["y"], tracks, view)
-        frames = annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None))
+        frames = with_scale_bar(annotate_frames(source.shown(), view, [layer], false_detections=false, legend=track_legend(false is not None)), units, enlarged)
         count = write_frames(out, frames, settings.fps or source.fps, source.frame_count)
     return f"wrote {out}: {counted(count, 'frame')} of {counted(tracks.n_tracks, 'track')}, {view.size[0]}x{view.size[1]}" + (f", and {summary}" if summary else "")

@@ -37,7 +37,7 @@ NAN_WORDS = ("nan", "+nan", "-nan", "")
 _WRITE_ROWS = 65536
 
 
-def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None:
+def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray], float_format: str = _FLOAT_FORMAT) -> None:
     """Write columns of equal length as CSV with a header, atomically.
 
     Parameters
@@ -48,6 +48,9 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
         Column name to 1-D array; integer and boolean columns are written as integers, float
         columns with four decimals (NaN as an empty field), text (object or string) columns as
         they are.
+    float_format : str
+        printf-style format of float columns, for tables in units where four decimals are too
+        few (``"%.8g"``: significant digits).
 
     Example
     -------
@@ -73,7 +76,7 @@ def write_table(path: str | os.PathLike, columns: dict[str, np.ndarray]) -> None
         # the others, so the bytes are the same.
         for start in range(0, max(rows, 1), _WRITE_ROWS):
             block = pd.DataFrame({name: _for_writing(values[start : start + _WRITE_ROWS]) for name, values in columns.items()})
-            block.to_csv(out, header=start == 0, index=False, float_format=_FLOAT_FORMAT, na_rep="", lineterminator="\n")
+            block.to_csv(out, header=start == 0, index=False, float_format=float_format, na_rep="", lineterminator="\n")
 
 
 def check_table_name(path: str | os.PathLike) -> Path:

@@ -11,6 +11,8 @@ trackpy    trackpy's table (frame,particle,x,y)          ``.csv`` with a ``parti
 mot        MOTChallenge text (1-based frames, boxes)     ``.txt``
 trackmate  TrackMate XML (spots, edges, tracks)          ``.xml`` with root ``<TrackMate>``
 isbi       ISBI 2012 particle-tracking challenge XML     ``.xml`` with root ``<root>``
+geff       GEFF graph (a zarr folder), via ``geff``      ``.geff``
+napari     napari Tracks layer array (ID, T, Y, X)       ``.npy``
 ========== ============================================= =====================================
 
 The extensions come from the one table :data:`seedtrack.data.formats.EXTENSIONS`, which writers
@@ -27,14 +29,15 @@ import numpy as np
 
 from seedtrack.tracking.tracks import Tracks
 
+from .calibration import Calibration
 from .csvio import text_lines
 from .errors import DataError, check_file
-from .formats import EXTENSIONS, described, isbi, mot, seedtrack_csv, trackmate, trackpy
+from .formats import EXTENSIONS, described, geff, isbi, mot, napari, seedtrack_csv, trackmate, trackpy
 from .formats.rows import rows_to_tracks
 from .formats.xmltree import root_tag
 from .outputset import check_member
 
-FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi}
+FORMATS = {"csv": seedtrack_csv, "trackpy": trackpy, "mot": mot, "trackmate": trackmate, "isbi": isbi, "geff": geff, "napari": napari}
 
 
 def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
@@ -44,8 +47,8 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
     ----------
     path : path-like
     format : str, optional
-        One of ``csv``, ``trackpy``, ``mot``, ``trackmate``, ``isbi``; by default chosen from the
-        extension and, for ``.csv`` and ``.xml``, the header or root element.
+        One of :data:`FORMATS`; by default chosen from the extension and, for ``.csv`` and
+        ``.xml``, the header or root element.
 
     Returns
     -------
@@ -66,25 +69,48 @@ def read_tracks(path: str | os.PathLike, format: str | None = None) -> Tracks:
     return rows_to_tracks(path, FORMATS[name].read(path))
 
 
+def read_calibration(path: str | os.PathLike, format: str | None = None) -> Calibration:
+    """The units a track file's positions and times are in, for the formats that say
+    (TrackMate XML, GEFF); pixels and frames for the others.
+
+    Example
+    -------
+    >>> import tempfile, pathlib
+    >>> from seedtrack.tracking.tracks import Tracks
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "t.xml"
+    >>> write_tracks(out, Tracks.from_rows([0, 0], [0, 1], [1.0, 2.0], [1.0, 1.0]), units=Calibration(0.5, "micron", 2.0, "sec"))
+    >>> read_calibration(out)
+    Calibration(pixel_size=0.5, space_unit='micron', frame_interval=2.0, time_unit='sec')
+    """
+    path = Path(path)
+    name = _check_format(format) if format is not None else _sniff(path)
+    reader = getattr(FORMATS[name], "calibration", None)
+    return reader(path) if reader is not None else Calibration()
+
+
 def write_tracks(
     path: str | os.PathLike,
     tracks: Tracks,
     frame_indices: np.ndarray | None = None,
     format: str | None = None,
+    units: Calibration | None = None,
 ) -> None:
     """Write a track set, atomically, in the format given or implied by the extension.
 
     Parameters
     ----------
     path : path-like
-        ``.csv`` writes our ``tracks.csv``, ``.txt`` MOTChallenge, ``.xml`` TrackMate, unless
-        ``format`` says otherwise.
+        ``.csv`` writes our ``tracks.csv``, ``.txt`` MOTChallenge, ``.xml`` TrackMate, ``.geff``
+        GEFF, ``.npy`` napari's tracks array, unless ``format`` says otherwise.
     tracks : Tracks
     frame_indices : ndarray of int, optional
         0-based clip frame index of each track-set column, when frames were skipped; by default
         column ``c`` is frame ``tracks.first_frame + c``.
     format : str, optional
         One of :data:`FORMATS`.
+    units : Calibration, optional
+        Physical units, for the formats that hold them (TrackMate XML, GEFF); the others stay
+        in pixels and frames.
 
     Raises
     ------
@@ -94,7 +120,7 @@ def write_tracks(
     rows = tracks.to_rows()
     if frame_indices is not None:
         rows["frame"] = np.asarray(frame_indices)[rows["frame"] - tracks.first_frame]
-    write_rows(path, rows, format)
+    write_rows(path, rows, format, units)
 
 
 def output_format(path: str | os.PathLike, format: str | None = None) -> str:
@@ -119,16 +145,21 @@ def output_format(path: str | os.PathLike, format: str | None = None) -> str:
     return names[0]
 
 
-def write_rows(path: str | os.PathLike, rows: dict[str, np.ndarray], format: str | None = None) -> None:
+def write_rows(path: str | os.PathLike, rows: dict[str, np.ndarray], format: str | None = None, units: Calibration | None = None) -> None:
     """Write flat track rows (the columns of :meth:`Tracks.to_rows`; our CSV also keeps any
-    further columns, after those) atomically, in the format :func:`output_format` picks.
+    further columns, after those) atomically, in the format :func:`output_format` picks, in
+    ``units`` where the format holds units.
 
     Raises
     ------
     DataError
         If the format is unknown or the file cannot be written.
     """
-    FORMATS[output_format(path, format)].write(Path(path), rows)
+    module = FORMATS[output_format(path, format)]
+    if getattr(module, "calibration", None) is not None:
+        module.write(Path(path), rows, units)
+    else:
+        module.write(Path(path), rows)
 
 
 def _check_format(name: str) -> str:
@@ -142,6 +173,8 @@ def _known() -> str:
 
 
 def _sniff(path: Path) -> str:
+    if path.suffix.lower() == ".geff":
+        return "geff"  # a folder, which the reader checks
     check_file(path)
     names = EXTENSIONS.get(path.suffix.lower())
     if names is None:

@@ -4,6 +4,7 @@ import motmetrics as mm
 import numpy as np
 import pytest
 
+from frame_points import frames_of
 from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.tracks import Tracks
 
@@ -40,17 +41,7 @@ def _result(rng, truth, swaps, drop, false_tracks, late_frames):
 
 def _motmetrics(result, truth, tolerance):
     accumulator = mm.MOTAccumulator()
-    frames = range(min(result.first_frame, truth.first_frame), max(result.first_frame + result.n_frames, truth.first_frame + truth.n_frames))
-    for frame in frames:
-        def present(tracks):
-            column = frame - tracks.first_frame
-            if not 0 <= column < tracks.n_frames:
-                return np.zeros(0, int), np.zeros((0, 2))
-            rows = np.flatnonzero(tracks.present[:, column])
-            return rows, tracks.xy[rows, column]
-
-        o, a = present(truth)
-        h, b = present(result)
+    for frame, (o, a), (h, b) in frames_of(result, truth):
         distance = np.sqrt(mm.distances.norm2squared_matrix(a, b, max_d2=tolerance**2))
         accumulator.update(o, h, distance, frameid=frame)
     metrics = ["mota", "motp", "idf1", "num_switches", "num_fragmentations", "num_misses", "num_false_positives", "num_matches"]

@@ -25,7 +25,7 @@ from seedtrack.tracking.persistence import PersistentModel
         (lambda: LinkSettings(fixed_count=True, max_gap=2), "max_gap does not apply with fixed_count", ("max_gap", "fixed_count")),
         (lambda: LinkSettings(algorithm="goa-updown-fixed", max_gap=0), "max_gap only apply to algorithm goa-updown", ("max_gap", "algorithm")),
         (lambda: LinkSettings(individual_model="persistent"), "individual_model must be one of im1, im2, im3", ("individual_model",)),
-        (lambda: EvaluateSettings(format="xls"), "format must be one of csv, isbi, mot, trackmate, trackpy", ("format",)),
+        (lambda: EvaluateSettings(format="xls"), "format must be one of csv, geff, isbi, mot, napari, trackmate, trackpy", ("format",)),
         (lambda: RenderSettings(fps=0.0), "fps must be at least 0.01", ("fps",)),
     ],
 )

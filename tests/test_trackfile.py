@@ -136,7 +136,7 @@ def test_isbi_particles_become_tracks(tmp_path):
         ("bad.xml", '<root><TrackContestISBI2012>\n<particle>\n<detection t="0" x="1" y="1"\n</particle></TrackContestISBI2012></root>', "bad.xml: line 4, column 1: malformed XML"),
         ("bad.xml", TRACKMATE.replace('<Spot ID="201"', '<Spot ID="201" FRAME="0"'), "bad.xml: line 12, column"),
         ("t.xml", TRACKMATE.replace('POSITION_X="52"', 'POSITION_X="fifty"'), "t.xml: line 12: POSITION_X='fifty' is not a number"),
-        ("um.xml", TRACKMATE.replace('spatialunits="pixel"', 'spatialunits="micron"'), "um.xml: line 3: TrackMate's positions are in micron, not pixels"),
+        ("um.xml", TRACKMATE.replace('spatialunits="pixel"', 'spatialunits="micron"'), "um.xml: line 3: TrackMate's positions are in micron, but the file gives no pixel size"),
         ("zero.txt", "0,1,0,0,0,0,1\n", "zero.txt: line 1: frame 0; MOTChallenge frames count from 1"),
         ("other.csv", "a,b\n1,2\n", "other.csv: line 1: a track CSV needs columns"),
         ("other.xml", "<svg></svg>", "other.xml: line 1: XML root <svg> is neither TrackMate"),

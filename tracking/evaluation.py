@@ -1,13 +1,17 @@
 """Every score of a track set against the truth, in one record: the paper's measures
-(:mod:`seedtrack.tracking.metrics`) and the CLEAR-MOT and identity measures
-(:mod:`seedtrack.tracking.clear_mot`), as ``seedtrack evaluate`` prints them."""
+(:mod:`seedtrack.tracking.metrics`), the CLEAR-MOT and identity measures
+(:mod:`seedtrack.tracking.clear_mot`), HOTA (:mod:`seedtrack.tracking.hota`) and the ISBI 2012
+particle tracking challenge's (:mod:`seedtrack.tracking.particle_challenge`), as
+``seedtrack evaluate`` prints them."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from .clear_mot import ClearMotScores, clear_mot
+from .hota import hota
 from .metrics import score_tracks
+from .particle_challenge import challenge_scores
 from .tracks import Tracks
 
 
@@ -36,6 +40,13 @@ class Scores:
         Mean distance of the matched points.
     idf1, idp, idr : float
         Identity F1, precision and recall.
+    hota, det_a, ass_a, loc_a : float
+        HOTA and its detection, association and localisation accuracies, with the point
+        similarity ``max(0, 1 - distance / tolerance)``.
+    isbi_alpha, isbi_beta, isbi_jsc, isbi_jsc_theta : float
+        The ISBI 2012 particle tracking challenge's track-pairing measures, gate = tolerance.
+    isbi_rmse_px : float
+        Their root mean square distance of the matched points.
     """
 
     tolerance_px: float
@@ -59,6 +70,15 @@ class Scores:
     idf1: float
     idp: float
     idr: float
+    hota: float
+    det_a: float
+    ass_a: float
+    loc_a: float
+    isbi_alpha: float
+    isbi_beta: float
+    isbi_jsc: float
+    isbi_jsc_theta: float
+    isbi_rmse_px: float
 
 
 def evaluate_tracks(result: Tracks, truth: Tracks, tolerance: float = 3.0) -> tuple[Scores, ClearMotScores]:
@@ -81,6 +101,8 @@ def evaluate_tracks(result: Tracks, truth: Tracks, tolerance: float = 3.0) -> tu
     """
     paper = score_tracks(result, truth, tolerance)
     clear = clear_mot(result, truth, tolerance)
+    higher = hota(result, truth, tolerance)
+    challenge = challenge_scores(result, truth, tolerance)
     scores = Scores(
         tolerance_px=tolerance,
         true_tracks=paper.true_tracks,
@@ -103,6 +125,15 @@ def evaluate_tracks(result: Tracks, truth: Tracks, tolerance: float = 3.0) -> tu
         idf1=clear.idf1,
         idp=clear.idp,
         idr=clear.idr,
+        hota=higher.hota,
+        det_a=higher.det_a,
+        ass_a=higher.ass_a,
+        loc_a=higher.loc_a,
+        isbi_alpha=challenge.alpha,
+        isbi_beta=challenge.beta,
+        isbi_jsc=challenge.jsc,
+        isbi_jsc_theta=challenge.jsc_theta,
+        isbi_rmse_px=challenge.rmse,
     )
     return scores, clear
 

@@ -25,9 +25,10 @@ CORRECTIONS = "corrections.txt"
 TRACKS = "tracks.csv"
 # Without TRACKS the session starts from no tracks, written here so that `correct` has an input.
 EMPTY_START = "start.csv"
-# Every track format the project writes, and the file each export goes to.
-EXPORTS = {"csv": "tracks.csv", "trackpy": "tracks.trackpy.csv", "mot": "tracks.mot.txt", "trackmate": "tracks.trackmate.xml", "isbi": "tracks.isbi.xml"}
-assert set(EXPORTS) == set(FORMATS)
+# Every track format the project writes, and the file each export goes to; but GEFF, which needs
+# an optional package and is a folder (never replaced): `seedtrack correct --out x.geff` writes it.
+EXPORTS = {"csv": "tracks.csv", "trackpy": "tracks.trackpy.csv", "mot": "tracks.mot.txt", "trackmate": "tracks.trackmate.xml", "isbi": "tracks.isbi.xml", "napari": "tracks.napari.npy"}
+assert set(EXPORTS) == set(FORMATS) - {"geff"}
 # Every file a session may write into its folder.
 SESSION_FILES = (CORRECTIONS, TRACKS, EMPTY_START, *EXPORTS.values())
 # A click within this distance of a track's point (pixels) means that point.

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from seedtrack.data.corrections import apply_corrections, read_corrections
-from seedtrack.data.trackfile import FORMATS, read_tracks, write_tracks
+from seedtrack.data.trackfile import FORMATS, read_calibration, read_tracks, write_tracks
 
 from ..errors import output_file
 from ..outputs import refuse_replacing_inputs
@@ -22,7 +22,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to correct (any track format)")
     parser.add_argument("edits", type=Path, metavar="EDITS", help="corrections file")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt or .xml)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRUTH", help="corrected tracks (.csv, .txt, .xml, .geff or .npy)")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
     parser.add_argument("--out-format", choices=sorted(FORMATS), default=None, help="format of the output (default: from its extension)")
     parser.set_defaults(run=run)
@@ -33,6 +33,7 @@ def run(args: argparse.Namespace) -> int:
     tracks = read_tracks(args.tracks, args.format)
     edits = read_corrections(args.edits)
     corrected = apply_corrections(tracks, edits, args.edits)
-    write_tracks(args.out, corrected, format=args.out_format)
+    # A calibrated TrackMate truth stays in its units.
+    write_tracks(args.out, corrected, format=args.out_format, units=read_calibration(args.tracks, args.format))
     print(f"applied {counted(len(edits), 'edit')}: {counted(tracks.n_tracks, 'track')} in, {corrected.n_tracks} out; wrote {args.out}")
     return 0

@@ -29,7 +29,9 @@ def add_parser(subparsers) -> None:
         "evaluate",
         description="Match result points to true points frame by frame (one to one, within --tol, by optimal "
         "assignment) and report the paper's strict track error, relaxed trajectory merit and link error, and "
-        "ID switches, fragmentations, MOTA, MOTP and IDF1 as py-motmetrics computes them. With --out, also "
+        "ID switches, fragmentations, MOTA, MOTP and IDF1 as py-motmetrics computes them, HOTA with DetA, AssA and "
+        "LocA as TrackEval computes them (point similarity 1 - distance/tol), and the ISBI 2012 particle tracking "
+        "challenge's alpha, beta, JSC, JSC_theta and RMSE (gate = tol); see docs/metrics.md. With --out, also "
         "write DIR/evaluation.json, DIR/wrong_tracks.csv and DIR/errors.png. A result with no tracks (a header "
         "only) scores as every true track missed. TRUTH must hold points in at least two frames, since the "
         "track and link errors are about links; otherwise, and for a missing column or a value that is not a "

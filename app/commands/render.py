@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from seedtrack.data.clip_units import tiff_calibration
 from seedtrack.data.csvio import read_points
 from seedtrack.data.trackfile import FORMATS, read_tracks
 
@@ -13,6 +14,7 @@ from ..rendering import draw, output_checked
 from ..settings import RenderSettings
 from ..wording import CLIP_INPUT_HELP
 from . import settings_of
+from .units import add_unit_options, calibration_from
 
 DEFAULT_TRAIL = RenderSettings().trail
 
@@ -47,11 +49,12 @@ def add_parser(subparsers) -> None:
         "crossed out (with --detections), a legend and the frame number.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
-    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml)")
+    parser.add_argument("tracks", type=Path, metavar="TRACKS", help="tracks to draw (csv, trackpy csv, MOT txt, TrackMate or ISBI xml, GEFF, napari npy)")
     add_view_options(parser, out_required=False)
     parser.add_argument("--summary", type=Path, default=None, metavar="PNG", help="also draw every whole trajectory over the first frame into this PNG")
     parser.add_argument("--detections", type=Path, default=None, metavar="CSV", help="detections.csv (frame,x,y,...): mark those that no track holds")
     parser.add_argument("--format", choices=sorted(FORMATS), default=None, help="format of TRACKS (default: from the extension and contents)")
+    add_unit_options(parser)
     parser.set_defaults(run=run)
 
 
@@ -61,5 +64,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_replacing_inputs([args.input, args.tracks, args.detections], [args.out, args.summary])
     tracks = read_tracks(args.tracks, args.format)
     detections = read_points(args.detections) if args.detections is not None else None
-    print(draw(args.input, tracks, args.tracks, args.out, kind, settings, args.summary, detections, args.detections))
+    # A calibrated TIFF, or --pixel-size, gives the frames a scale bar.
+    units = calibration_from(args, tiff_calibration(args.input))
+    print(draw(args.input, tracks, args.tracks, args.out, kind, settings, args.summary, detections, args.detections, units))
     return 0

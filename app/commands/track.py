@@ -18,6 +18,7 @@ from ..settings import COMBINED_CHOICES, INDIVIDUAL_CHOICES, LinkSettings
 from ..wording import counted
 from . import settings_of
 from .tracker_options import add_tracker_options, add_verbose_option
+from .units import add_unit_options, calibration_from
 
 DESCRIPTION = """\
 Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any other columns are
@@ -73,7 +74,7 @@ def add_parser(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("points", type=Path, metavar="POINTS.csv", help="measured points: frame,x,y[,other columns]")
-    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge) or .xml (TrackMate)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="TRACKS.csv", help="output tracks: .csv (ours, with the kept columns), .txt (MOTChallenge), .xml (TrackMate), .geff (GEFF) or .npy (napari)")
     parser.add_argument(
         "--algorithm",
         choices=("goa", *TRACKERS),
@@ -82,6 +83,7 @@ def add_parser(subparsers) -> None:
     )
     add_tracker_options(parser)
     add_verbose_option(parser)
+    add_unit_options(parser)
     group = parser.add_argument_group("GOA and GOA-updown only")
     group.add_argument(
         "--individual-model",
@@ -118,6 +120,7 @@ def read_points(path: Path) -> Points:
 
 def run(args: argparse.Namespace) -> int:
     settings = settings_of(LinkSettings, args)
+    units = calibration_from(args)
     return_freed_memory()
     # Now rather than after a long tracking run.
     check_target(args.out)
@@ -130,6 +133,6 @@ def run(args: argparse.Namespace) -> int:
     rows = track_rows(points, tracks)
     # Only the rows are written: the points and tracks freed do not add to the writer's peak.
     del points, tracks
-    write_rows(args.out, rows)
+    write_rows(args.out, rows, units=units)
     print(f"{counts}, {counted(int(rows['interpolated'].sum()), 'interpolated position')}; wrote {args.out}")
     return 0

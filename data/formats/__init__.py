@@ -14,6 +14,8 @@ EXTENSIONS = {
     ".csv": ("csv", "trackpy"),
     ".txt": ("mot",),
     ".xml": ("trackmate", "isbi"),
+    ".geff": ("geff",),
+    ".npy": ("napari",),
 }
 # Formats that are CSV tables with a header row; a table of points may be named after these only.
 CSV_FORMATS = ("csv", "trackpy")

@@ -1,8 +1,11 @@
 """TrackMate XML (Fiji): ``Model/AllSpots/SpotsInFrame/Spot`` and ``Model/AllTracks/Track/Edge``.
 
-A spot carries ``ID``, ``FRAME`` (0-based, as ours) and ``POSITION_X``/``POSITION_Y`` in pixels
-(TrackMate writes calibrated units when the image is calibrated, as the model's ``spatialunits``
-attribute says; such a file is refused rather than read as pixels). A track is the set of spots its edges
+A spot carries ``ID``, ``FRAME`` (0-based, as ours) and ``POSITION_X``/``POSITION_Y`` in the
+model's ``spatialunits``: pixels, or, for a calibrated image, a length unit (``micron``...) with
+the pixel size in ``Settings/ImageData``'s ``pixelwidth`` and ``pixelheight``; positions are read
+back into pixels by dividing by them (a calibrated file without them is refused), and
+:func:`calibration` gives the file's units. The writer writes pixels and frames, or the
+calibrated units it is given. A track is the set of spots its edges
 (``SPOT_SOURCE_ID``, ``SPOT_TARGET_ID``) join, under its ``TRACK_ID``. When the file lists
 ``FilteredTracks``, only those tracks are read, as TrackMate shows them. Spots on no track
 (unlinked detections) are not tracks and are skipped, so a track of a single point cannot be
@@ -18,6 +21,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..calibration import FRAME, PIXEL, Calibration
 from ..errors import DataError, warn
 from .rows import Rows
 from .xmltree import number, parse_xml, write_xml
@@ -29,11 +33,11 @@ def read(path) -> Rows:
     model = root.find("Model") if root.tag == "TrackMate" else None
     if model is None:
         raise DataError(path, f"line {root.line}: not a TrackMate file (expected <TrackMate><Model>, found <{root.tag}>)")
-    check_pixels(path, model.line, model.attrib.get("spatialunits", ""))
+    width, height = _pixel_size(path, root, model)
     spots = {}
     for spot in model.iter("Spot"):
         spot_id = int(number(path, spot, "ID", whole=True))
-        spots[spot_id] = (int(number(path, spot, "FRAME", whole=True)), number(path, spot, "POSITION_X"), number(path, spot, "POSITION_Y"), spot.line)
+        spots[spot_id] = (int(number(path, spot, "FRAME", whole=True)), number(path, spot, "POSITION_X") / width, number(path, spot, "POSITION_Y") / height, spot.line)
     shown = model.find("FilteredTracks")
     keep = None if shown is None else {int(number(path, t, "TRACK_ID", whole=True)) for t in shown.iter("TrackID")}
     tracks = []
@@ -49,7 +53,7 @@ def read(path) -> Rows:
                 if spot_id not in spots:
                     raise DataError(path, f"line {edge.line}: edge names spot {spot_id}, which is not in AllSpots")
             edges.append(sorted(ends, key=lambda spot_id: spots[spot_id][0]))  # earlier frame first
-        tracks.append((track_id, _branches(edges)))
+        tracks.append((track_id, unbranched_runs(edges)))
     rows, branched = [], 0
     next_id = max((track_id for track_id, _ in tracks), default=-1) + 1
     for track_id, branches in tracks:
@@ -64,8 +68,36 @@ def read(path) -> Rows:
     return Rows(table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3], table[:, 4].astype(np.int64))
 
 
+def calibration(path) -> Calibration:
+    """The units a TrackMate file's positions and times are in.
+
+    Raises
+    ------
+    DataError
+        If the file is not TrackMate's, or its positions are calibrated but it gives no pixel size.
+    """
+    root = parse_xml(path)
+    model = root.find("Model") if root.tag == "TrackMate" else None
+    if model is None:
+        raise DataError(path, f"line {root.line}: not a TrackMate file (expected <TrackMate><Model>, found <{root.tag}>)")
+    width, _ = _pixel_size(path, root, model)
+    image = _image_data(root)
+    interval = number(path, image, "timeinterval") if image is not None and "timeinterval" in image.attrib else 1.0
+    time_unit = model.attrib.get("timeunits", FRAME) or FRAME
+    if time_unit.lower() in ("frame", "frames"):
+        time_unit, interval = FRAME, 1.0
+    space_unit = model.attrib.get("spatialunits", PIXEL) or PIXEL
+    if _is_pixels(space_unit):
+        space_unit = PIXEL
+    try:
+        return Calibration(width, space_unit, interval if interval > 0 else 1.0, time_unit)
+    except ValueError as error:
+        raise DataError(path, f"line {model.line}: {error}") from None
+
+
 def check_pixels(path, line: int, unit: str) -> None:
-    """Refuse TrackMate positions in a calibrated unit (microns...): ours are pixels.
+    """Refuse TrackMate spot-table positions in a calibrated unit (microns...): ours are pixels,
+    and a spot table carries no pixel size to convert them.
 
     Raises
     ------
@@ -76,17 +108,44 @@ def check_pixels(path, line: int, unit: str) -> None:
     -------
     >>> check_pixels("spots.csv", 4, "pixel")
     """
-    if unit and unit.lower() not in ("pixel", "pixels"):
+    if not _is_pixels(unit):
         raise DataError(path, f"line {line}: TrackMate's positions are in {unit}, not pixels; export them from the image with its pixel size set to 1 pixel (Image > Properties)")
 
 
-def write(path, rows: dict[str, np.ndarray]) -> None:
-    """Write tracks as a TrackMate model (pixels, frames), atomically; single-point tracks are left out."""
+def _is_pixels(unit: str) -> bool:
+    return unit.lower() in ("", "pixel", "pixels")
+
+
+def _image_data(root):
+    settings = root.find("Settings")
+    return settings.find("ImageData") if settings is not None else None
+
+
+def _pixel_size(path, root, model) -> tuple[float, float]:
+    """Length of a pixel along x and y in the model's spatial unit (1 when that unit is pixels)."""
+    unit = model.attrib.get("spatialunits", "")
+    if _is_pixels(unit):
+        return 1.0, 1.0
+    image = _image_data(root)
+    if image is None or "pixelwidth" not in image.attrib:
+        raise DataError(path, f"line {model.line}: TrackMate's positions are in {unit}, but the file gives no pixel size (<Settings><ImageData pixelwidth=...>) to turn them into pixels")
+    width = number(path, image, "pixelwidth")
+    height = number(path, image, "pixelheight") if "pixelheight" in image.attrib else width
+    if not (width > 0 and height > 0):
+        raise DataError(path, f"line {image.line}: pixel size {width:g} x {height:g} {unit}; it must be positive")
+    return width, height
+
+
+def write(path, rows: dict[str, np.ndarray], units: Calibration | None = None) -> None:
+    """Write tracks as a TrackMate model, atomically, in pixels and frames or in the units given
+    (positions times the pixel size, ``POSITION_T`` times the frame interval, and the image's
+    calibration in ``Settings/ImageData``); single-point tracks are left out."""
+    units = units or Calibration()
     ids, counts = np.unique(rows["track_id"], return_counts=True)
     linked = np.isin(rows["track_id"], ids[counts > 1])
     order = np.flatnonzero(linked)[np.lexsort((rows["track_id"][linked], rows["frame"][linked]))]
     root = ET.Element("TrackMate", version="7.0.0")
-    model = ET.SubElement(root, "Model", spatialunits="pixel", timeunits="frame")
+    model = ET.SubElement(root, "Model", spatialunits=units.space_unit, timeunits=units.time_unit)
     all_spots = ET.SubElement(model, "AllSpots", nspots=str(order.size))
     # Spot ids are row positions in frame order, so the same tracks give the same file.
     spot_id = np.empty(rows["frame"].size, dtype=np.int64)
@@ -102,12 +161,12 @@ def write(path, rows: dict[str, np.ndarray]) -> None:
             ID=str(spot_id[i]),
             name=f"ID{spot_id[i]}",
             FRAME=str(frame),
-            POSITION_X=f"{rows['x'][i]:.4f}",
-            POSITION_Y=f"{rows['y'][i]:.4f}",
+            POSITION_X=f"{units.length(rows['x'][i]):.4f}",
+            POSITION_Y=f"{units.length(rows['y'][i]):.4f}",
             POSITION_Z="0.0",
-            POSITION_T=f"{float(frame)}",
+            POSITION_T=f"{float(units.duration(frame))}",
             QUALITY="1.0",
-            RADIUS="1.0",
+            RADIUS=f"{units.length(1.0)}",
             VISIBILITY="1",
         )
     all_tracks = ET.SubElement(model, "AllTracks")
@@ -119,10 +178,14 @@ def write(path, rows: dict[str, np.ndarray]) -> None:
         for source, target in zip(members[:-1], members[1:]):
             ET.SubElement(track, "Edge", SPOT_SOURCE_ID=str(spot_id[source]), SPOT_TARGET_ID=str(spot_id[target]), EDGE_TIME=f"{rows['frame'][source] + 0.5}")
         ET.SubElement(filtered, "TrackID", TRACK_ID=str(track_id))
+    if units.calibrated:
+        settings = ET.SubElement(root, "Settings")
+        size = f"{units.pixel_size}"
+        ET.SubElement(settings, "ImageData", pixelwidth=size, pixelheight=size, voxeldepth=size, timeinterval=f"{units.frame_interval}")
     write_xml(path, root)
 
 
-def _branches(edges: list[list[int]]) -> list[list[int]]:
+def unbranched_runs(edges: list[list[int]]) -> list[list[int]]:
     """The unbranched runs of spots of one track, from its (earlier, later) edges: a run ends
     where a spot has other than one successor, or its successor other than one predecessor."""
     after: dict[int, list[int]] = {}
