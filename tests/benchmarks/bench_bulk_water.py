@@ -11,7 +11,11 @@ memory=3)``, ``filter_stubs(25)``: tracks of 25 frames or more, so real beads. P
   single seedtrack track lies within 1 px of at least 80% of the confident track's points (in
   the same frames; interpolated positions count, as they stand for the bead).
 
-and, to tell detection from linking apart: how many confident tracks seedtrack's detections hold
+and, to tell the beads a person sees from trackpy's own background features: of the confident
+tracks' positions inside the crops where beads were marked by looking (``bead_truth.py``), the
+share that lie on a marked bead (within 3 px), and the share of each kind seedtrack detects.
+
+And, to tell detection from linking apart: how many confident tracks seedtrack's detections hold
 at 80% of their points within 1 px (the most any linker could reproduce from them); how many
 trackpy's linker (its settings above) reproduces from seedtrack's detections; and how many
 seedtrack's linker (``seedtrack.link``, track's defaults) reproduces from trackpy's own
@@ -39,6 +43,7 @@ import trackpy
 from scipy.spatial import cKDTree
 
 import seedtrack
+from bead_truth import CROPS, SIDE, TRUTH_DIR
 from seedtrack.data.csvio import read_table
 from seedtrack.data.frames import open_frames
 from seedtrack.detection.blobs import to_gray
@@ -139,6 +144,21 @@ def found_within(reference: pd.DataFrame, table: dict[str, np.ndarray], ids: np.
     return nearest
 
 
+def on_marked_beads(reference: pd.DataFrame, detections: dict[str, np.ndarray]) -> pd.DataFrame:
+    """Per confident-track position 3 px or more inside a marked crop of a marked frame: whether
+    a marked bead lies within 3 px, and whether ``detections`` hold it within 1 px."""
+    truth = pd.read_csv(TRUTH_DIR / "truth.csv")
+    parts = []
+    for (frame, crop), marks in truth.groupby(["frame", "crop"]):
+        x0, y0 = CROPS[crop]
+        inside = reference[
+            (reference.frame == frame) & reference.x.between(x0 + 3, x0 + SIDE - 4) & reference.y.between(y0 + 3, y0 + SIDE - 4)
+        ]
+        distance, _ = cKDTree(marks[["x", "y"]].to_numpy()).query(inside[["x", "y"]].to_numpy(), distance_upper_bound=3.0)
+        parts.append(pd.DataFrame({"bead": np.isfinite(distance), "found": found_within(inside, detections) >= 0}))
+    return pd.concat(parts, ignore_index=True)
+
+
 def reproduced(reference: pd.DataFrame, tracks: dict[str, np.ndarray]) -> tuple[int, int]:
     """(confident tracks reproduced by one seedtrack track, confident tracks)."""
     row = found_within(reference, tracks)
@@ -175,6 +195,13 @@ def main() -> None:
     )
     hit = found_within(reference, detections) >= 0
     print(f"  positions of confident tracks with a seedtrack detection within {TOLERANCE_PX:g} px: {hit.mean():.4f} (goal 0.95)")
+    marked = on_marked_beads(reference, detections)
+    beads, background = marked[marked.bead], marked[~marked.bead]
+    print(
+        f"  in the {len(pd.read_csv(TRUTH_DIR / 'truth.csv').groupby(['frame', 'crop']))} marked crops: {len(marked)} positions of confident tracks, "
+        f"{len(beads)} on a bead marked by looking (seedtrack detects {beads.found.mean():.3f} within {TOLERANCE_PX:g} px), "
+        f"{len(background)} on none ({background.found.mean():.3f})"
+    )
     count, total = reproduced(reference, tracks)
     print(
         f"  confident tracks reproduced (one seedtrack track within {TOLERANCE_PX:g} px of >= {REPRODUCED_SHARE:.0%} of "
