@@ -274,7 +274,12 @@ def detect_clip(
         background = None
         if settings.options.background == "temporal":
             background = _temporal_background(path, settings, source) if on_file else source.background()
-        detector = ClipDetector(settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass, settings.snr)
+        # On a 4000 x 3000 frame the first frame's decisions take tens of seconds before the bar
+        # first moves: they say on it what they measure meanwhile.
+        detector = ClipDetector(
+            settings.options, settings.detector, _given_roi(settings.roi, source.size), background, settings.diameter, settings.min_mass, settings.snr,
+            progress=lambda step: bar.set_postfix_str(f"first frame: {step}"),
+        )
         preview = None
 
         def decoded():
@@ -289,8 +294,10 @@ def detect_clip(
                 yield index, to_gray(image) if image.dtype == np.uint8 and image.ndim == 3 else image
 
         def counted_off(read):
-            for item in read:
+            for number, item in enumerate(read):
                 yield item
+                if number == 0:
+                    bar.set_postfix_str("", refresh=False)
                 bar.update(1)
 
         frames = decoded()

@@ -11,6 +11,7 @@ as the motion decision is.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
@@ -51,6 +52,7 @@ def choose_detector(
     roi: np.ndarray | None = None,
     min_mass: float | None = None,
     snr: float | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> DetectorChoice:
     """The detector for a clip, from its first frame.
 
@@ -74,6 +76,9 @@ def choose_detector(
         The spot detector's signal-to-background ratio: the least mass is this many times the
         typical mass of the background's own maxima (see
         :func:`seedtrack.detection.spots.fit_spot_settings`); ``min_mass`` wins when both are given.
+    progress : callable, optional
+        Called with a few words as each measurement begins (the spots' size and shape, then the
+        noise and least mass): each takes seconds on a frame of millions of pixels.
 
     Returns
     -------
@@ -90,11 +95,14 @@ def choose_detector(
         raise ValueError(f"detector must be one of {', '.join(DETECTOR_NAMES)}, got {detector!r}")
     if detector == "blob":
         return DetectorChoice("blob", "blob detector, as asked")
+    step = progress or (lambda _: None)
+    step("measuring the spots' size")
     shape = spot_shape(gray, polarity, roi)
 
     def spot_settings() -> SpotSettings:
         # Fitted only for the spot detector: measuring the noise costs a fifth of a second on a
         # 640x512 frame, as long as decoding 60 frames.
+        step("measuring the noise and the least mass")
         settings = fit_spot_settings(gray, polarity, diameter=diameter or shape.diameter, roi=roi, snr=snr)
         return settings if min_mass is None else replace(settings, min_mass=float(min_mass))
 

@@ -92,6 +92,10 @@ class ClipDetector:
         "none": the whole frame; a circle in pixels; a mask, nonzero inside.
     background : ndarray of uint8, shape (H, W), optional
         The background image when ``options.background`` is "temporal".
+    progress : callable, optional
+        Called with a few words (such as ``"measuring the spots' size"``) as each of the first
+        frame's once-per-clip decisions begins, and with ``"detecting"`` when they are made: on
+        a 4000 x 3000 frame they take tens of seconds. Not kept after the first frame.
 
     Attributes
     ----------
@@ -127,6 +131,7 @@ class ClipDetector:
         diameter: int | None = None,
         min_mass: float | None = None,
         snr: float | None = None,
+        progress: Callable[[str], None] | None = None,
     ) -> None:
         if detector not in DETECTORS:
             raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
@@ -143,6 +148,7 @@ class ClipDetector:
         self._detector, self._diameter, self._min_mass, self._snr = detector, diameter, min_mass, snr
         self.choice: DetectorChoice | None = None
         self._background = background
+        self._progress = progress
         self._first = True
 
     def detect(self, image: np.ndarray) -> dict[str, np.ndarray]:
@@ -167,24 +173,31 @@ class ClipDetector:
         if self._first:
             self._decide(gray, native)
             self._first = False
+            if self._progress is not None:
+                self._progress("detecting")
+            # A hook bound to a progress bar would stop the decided detector being pickled.
+            self._progress = None
         if self.choice.spots is not None:
             return detect_spots(native, self.choice.spots, roi=self.roi, background=self._background)
         return detect_blobs(gray, self.options, background=self._background, roi=self.roi, roi_box=self._roi_box)
 
     def _decide(self, gray: np.ndarray, native: np.ndarray) -> None:
+        step = self._progress or (lambda _: None)
         if isinstance(self._pending_roi, Circle):
             self.roi = circle_mask((gray.shape[1], gray.shape[0]), self._pending_roi)
         elif isinstance(self._pending_roi, str) and self._pending_roi == "auto":
+            step("looking for a dish")
             self.roi, self.circle = dish_mask(gray)
         if self.roi is not None and self.roi.shape != gray.shape:
             raise ValueError(f"the region of interest is {self.roi.shape[1]}x{self.roi.shape[0]}, the frame {gray.shape[1]}x{gray.shape[0]}")
         # Found once: at 1280x960 finding it took a third as long as detecting a frame.
         self._roi_box = cv2.boundingRect(self.roi) if self.roi is not None else None
         if self.options.polarity == "auto":
+            step("telling dark objects from light")
             self.options = replace(self.options, polarity=choose_polarity(gray, background_of(gray, self.options, self._background), self.roi))
         scene = as_float_gray(native) if self._background is None else gray.astype(np.float32) - self._background
         self.choice = choose_detector(
-            scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi, min_mass=self._min_mass, snr=self._snr
+            scene, self.options.polarity, detector=self._detector, diameter=self._diameter, roi=self.roi, min_mass=self._min_mass, snr=self._snr, progress=step
         )
 
 

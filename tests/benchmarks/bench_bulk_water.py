@@ -11,11 +11,19 @@ memory=3)``, ``filter_stubs(25)``: tracks of 25 frames or more, so real beads. P
   single seedtrack track lies within 1 px of at least 80% of the confident track's points (in
   the same frames; interpolated positions count, as they stand for the bead).
 
-and, to tell detection from linking apart: how many confident tracks seedtrack's detections hold
+and, to tell the beads a person sees from trackpy's own background features: of the confident
+tracks' positions inside the crops where beads were marked by looking (``bead_truth.py``), the
+share that lie on a marked bead (within 3 px), and the share of each kind seedtrack detects.
+
+And, to tell detection from linking apart: how many confident tracks seedtrack's detections hold
 at 80% of their points within 1 px (the most any linker could reproduce from them); how many
 trackpy's linker (its settings above) reproduces from seedtrack's detections; and how many
 seedtrack's linker (``seedtrack.link``, track's defaults) reproduces from trackpy's own
 detections (all of them, ``batch`` as above), where detection cannot be the cause.
+
+With ``--beside OPTIONS`` it also measures ``seedtrack run`` with those options (such as
+``--min-mass 6.7``, the earlier default's least mass), and with ``--write-docs`` writes the
+figures of both into ``docs/detection.md``'s ``bulk-water-confident`` table.
 
 With ``--context`` it also prints what the goal asks of any detector and linker other than the
 reference itself: how many confident tracks trackpy reproduces with one of its settings changed to
@@ -39,6 +47,8 @@ import trackpy
 from scipy.spatial import cKDTree
 
 import seedtrack
+from bead_truth import CROPS, SIDE, TRUTH_DIR
+from tables import write_table
 from seedtrack.data.csvio import read_table
 from seedtrack.data.frames import open_frames
 from seedtrack.detection.blobs import to_gray
@@ -139,6 +149,21 @@ def found_within(reference: pd.DataFrame, table: dict[str, np.ndarray], ids: np.
     return nearest
 
 
+def on_marked_beads(reference: pd.DataFrame, detections: dict[str, np.ndarray]) -> pd.DataFrame:
+    """Per confident-track position 3 px or more inside a marked crop of a marked frame: whether
+    a marked bead lies within 3 px, and whether ``detections`` hold it within 1 px."""
+    truth = pd.read_csv(TRUTH_DIR / "truth.csv")
+    parts = []
+    for (frame, crop), marks in truth.groupby(["frame", "crop"]):
+        x0, y0 = CROPS[crop]
+        inside = reference[
+            (reference.frame == frame) & reference.x.between(x0 + 3, x0 + SIDE - 4) & reference.y.between(y0 + 3, y0 + SIDE - 4)
+        ]
+        distance, _ = cKDTree(marks[["x", "y"]].to_numpy()).query(inside[["x", "y"]].to_numpy(), distance_upper_bound=3.0)
+        parts.append(pd.DataFrame({"bead": np.isfinite(distance), "found": found_within(inside, detections) >= 0}))
+    return pd.concat(parts, ignore_index=True)
+
+
 def reproduced(reference: pd.DataFrame, tracks: dict[str, np.ndarray]) -> tuple[int, int]:
     """(confident tracks reproduced by one seedtrack track, confident tracks)."""
     row = found_within(reference, tracks)
@@ -150,17 +175,11 @@ def reproduced(reference: pd.DataFrame, tracks: dict[str, np.ndarray]) -> tuple[
     return int(np.sum(share >= REPRODUCED_SHARE)), len(length)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("clip", nargs="?", type=Path, default=CLIP)
-    parser.add_argument("--context", action="store_true", help="also trackpy with one setting changed, and laptrack")
-    args = parser.parse_args()
-    clip = args.clip
-    frames = grey_frames(clip)
-    features, reference = confident_tracks(frames)
+def measured(clip: Path, reference: pd.DataFrame, options: list[str]) -> list[str]:
+    """Run ``seedtrack run`` with ``options`` and print its figures; the column of the docs table."""
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
-        result = subprocess.run([sys.executable, "-m", "seedtrack", "run", str(clip), "--out", folder], capture_output=True, text=True)
+        result = subprocess.run([sys.executable, "-m", "seedtrack", "run", str(clip), "--out", folder, *options], capture_output=True, text=True)
         seconds = time.perf_counter() - start
         if result.returncode != 0:
             raise SystemExit(result.stderr)
@@ -168,26 +187,66 @@ def main() -> None:
         tracks = read_table(Path(folder) / "tracks.csv")
     print(result.stdout.strip().splitlines()[0])
     frame_count = reference["frame"].nunique()
+    per_frame, track_count = len(detections["x"]) / frame_count, len(np.unique(tracks["track_id"]))
     print(
         f"{clip.name}: trackpy's confident tracks: {reference['particle'].nunique()} tracks, "
-        f"{len(reference)} positions ({len(reference) / frame_count:.0f} a frame); seedtrack run (defaults, {seconds:.0f} s): "
-        f"{len(detections['x']) / frame_count:.0f} detections a frame, {len(np.unique(tracks['track_id']))} tracks"
+        f"{len(reference)} positions ({len(reference) / frame_count:.0f} a frame); seedtrack run ({' '.join(options) or 'defaults'}, {seconds:.0f} s): "
+        f"{per_frame:.0f} detections a frame, {track_count} tracks"
     )
-    hit = found_within(reference, detections) >= 0
-    print(f"  positions of confident tracks with a seedtrack detection within {TOLERANCE_PX:g} px: {hit.mean():.4f} (goal 0.95)")
+    hit = (found_within(reference, detections) >= 0).mean()
+    print(f"  positions of confident tracks with a seedtrack detection within {TOLERANCE_PX:g} px: {hit:.4f} (goal 0.95)")
+    marked = on_marked_beads(reference, detections)
+    beads, background = marked[marked.bead], marked[~marked.bead]
+    print(
+        f"  in the {len(pd.read_csv(TRUTH_DIR / 'truth.csv').groupby(['frame', 'crop']))} marked crops: {len(marked)} positions of confident tracks, "
+        f"{len(beads)} on a bead marked by looking (seedtrack detects {beads.found.mean():.3f} within {TOLERANCE_PX:g} px), "
+        f"{len(background)} on none ({background.found.mean():.3f})"
+    )
     count, total = reproduced(reference, tracks)
     print(
         f"  confident tracks reproduced (one seedtrack track within {TOLERANCE_PX:g} px of >= {REPRODUCED_SHARE:.0%} of "
         f"their points): {count} of {total}, {count / total:.4f} (goal 0.90)"
     )
+    column = [f"{per_frame:.0f}; {track_count:,}", f"{hit:.3f}", f"{beads.found.mean():.3f} of {len(beads)} / {background.found.mean():.3f} of {len(background)}", f"{count} ({count / total:.3f})"]
     for what, count in (
         ("held by seedtrack's detections (the most a linker could reproduce)", held(reference, detections)),
         ("reproduced by trackpy's linker on seedtrack's detections", reproduced(reference, trackpy_linked(detections))[0]),
-        ("reproduced by seedtrack's linker on trackpy's own detections", reproduced(reference, seedtrack_linked(features))[0]),
     ):
         print(f"  confident tracks {what}: {count} of {total}, {count / total:.4f}")
+        column.append(f"{count} ({count / total:.3f})")
+    return column
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("clip", nargs="?", type=Path, default=CLIP)
+    parser.add_argument("--context", action="store_true", help="also trackpy with one setting changed, and laptrack")
+    parser.add_argument("--beside", metavar="OPTIONS", help="also `seedtrack run` with these options, e.g. '--min-mass 6.7'")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/detection.md")
+    args = parser.parse_args()
+    clip = args.clip
+    frames = grey_frames(clip)
+    features, reference = confident_tracks(frames)
+    columns = {"defaults": measured(clip, reference, [])}
+    if args.beside:
+        columns[f"`{args.beside}`"] = measured(clip, reference, args.beside.split())
+    total = reference["particle"].nunique()
+    linked = reproduced(reference, seedtrack_linked(features))[0]
+    print(f"  confident tracks reproduced by seedtrack's linker on trackpy's own detections: {linked} of {total}, {linked / total:.4f}")
     if args.context:
         context(frames, features, reference)
+    if args.write_docs:
+        rows = [
+            "detections a frame; tracks `run` makes",
+            "confident positions with a detection within 1 px",
+            "in the 30 crops marked by looking: confident positions on a marked bead / on none, share detected within 1 px",
+            f"confident tracks reproduced by seedtrack's own tracks (of {total})",
+            "held by seedtrack's detections at 80% of their points",
+            "reproduced by trackpy's linker on seedtrack's detections",
+        ]
+        table = [[what, *(column[k] for column in columns.values())] for k, what in enumerate(rows)]
+        table.append(["reproduced by seedtrack's linker on trackpy's own detections (no seedtrack detection)", *[f"{linked} ({linked / total:.3f})"] * len(columns)])
+        write_table("detection.md", "bulk-water-confident", ["measured", *columns], table)
 
 
 if __name__ == "__main__":
