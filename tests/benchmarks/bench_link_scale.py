@@ -1,0 +1,131 @@
+"""Linking at scale: ``seedtrack.link`` beside ``trackpy.link`` (with numba), CPU seconds in one run.
+
+Run as ``python tests/benchmarks/bench_link_scale.py [--bulk DETECTIONS.csv] [--sizes 1000 10000 100000]``.
+
+Random walkers (``seedtrack.data.walkers``, step sigma 1.5 px/axis, 300 walkers per 512 x 512 px,
+the view grown with the count) over ``--frames`` frames, and the detections of the bulk-water
+clip (``--bulk``: a csv of ``seedtrack detect``; without it the clip in /work/shared/data is
+detected once into a temporary folder). Both linkers run in this process, warmed up first
+(imports, numba's compilation), in turns, each size ``--repeats`` times (median). trackpy's
+``search_range`` is the fastest speed seedtrack measured on the same points (its speed limit over
+``SPEED_MARGIN``, the 99th percentile of the speeds: what one who knew the motion would set; at
+the limit itself trackpy gives up on crowded subnets), memory 0 (its default).
+
+Printed per row: CPU seconds of each (``time.process_time``: threads included, other work on a
+shared machine not), microseconds per point, the ratio seedtrack / trackpy, and the accuracy of
+both against the walkers' truth (link error and IDF1; tracks per frame on bulk water, which has
+no truth); then the log-log slope of seedtrack's CPU from the second size to the third. Goals
+(issue 31): ratio at most 0.7 at 10k, 100k and on bulk water, slope at most 1.05, ratio at most
+1 at 1k.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import seedtrack
+from seedtrack.data.walkers import WalkerSpec, generate_walkers
+from seedtrack.tracking.adaptive import SPEED_MARGIN
+
+BULK_CLIP = Path("/work/shared/data/bulk-water-240-479.mp4")
+# Walkers per 512 x 512 px: WalkerSpec's default scene.
+DENSITY = 300 / 512**2
+
+
+def walkers(count: int, frames: int, seed: int):
+    size = math.sqrt(count / DENSITY)
+    positions, truth = generate_walkers(WalkerSpec(walkers=count, frames=frames, size=size, random_seed=seed))
+    return table_of(positions), truth
+
+
+def table_of(frames: list[np.ndarray]) -> pd.DataFrame:
+    joined = np.concatenate(frames)
+    return pd.DataFrame({"frame": np.repeat(np.arange(len(frames)), [len(f) for f in frames]), "x": joined[:, 0], "y": joined[:, 1]})
+
+
+def fastest(tracks: pd.DataFrame) -> float:
+    """The fastest speed seedtrack measured (from its motion line), pixels/frame."""
+    return float(re.search(r"speed limit ([0-9.]+) px/frame", tracks.attrs["motion"]).group(1)) / SPEED_MARGIN
+
+
+def timed(link, table: pd.DataFrame):
+    start = time.process_time()
+    result = link(table)
+    return time.process_time() - start, result
+
+
+def compare(table: pd.DataFrame, repeats: int):
+    """Median CPU seconds of seedtrack.link and of trackpy.link, taken in turns, and their last tracks."""
+    import trackpy
+
+    ours, theirs = [], []
+    mine = peer = None
+    for _ in range(repeats):
+        seconds, mine = timed(seedtrack.link, table)
+        ours.append(seconds)
+        search_range = fastest(mine)
+        seconds, peer = timed(lambda t: trackpy.link(t, search_range), table)
+        theirs.append(seconds)
+    return statistics.median(ours), statistics.median(theirs), mine, peer
+
+
+def accuracy(tracks: pd.DataFrame, truth) -> str:
+    scores = seedtrack.evaluate(tracks, truth)
+    return f"link error {scores.link_error:.4f}, IDF1 {scores.idf1:.3f}"
+
+
+def bulk_points(path: str | None, folder: str) -> pd.DataFrame | None:
+    if path is not None:
+        return pd.read_csv(path)[["frame", "x", "y"]]
+    if not BULK_CLIP.exists():
+        return None
+    out = Path(folder) / "bulk.csv"
+    seedtrack.detect(BULK_CLIP).to_csv(out, index=False)
+    return pd.read_csv(out)[["frame", "x", "y"]]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs=3, default=[1000, 10000, 100000], help="walkers: in-process size, then the two of the slope")
+    parser.add_argument("--frames", type=int, default=10)
+    parser.add_argument("--repeats", type=int, nargs=3, default=[5, 3, 1], help="per size")
+    parser.add_argument("--bulk", help="detections csv of the bulk-water clip")
+    args = parser.parse_args()
+    import trackpy
+
+    trackpy.quiet()
+    warm, _ = walkers(300, 5, 99)
+    seedtrack.link(warm)
+    trackpy.link(warm, 5.0)
+
+    print(f"{'points':>22} {'seedtrack s':>11} {'trackpy s':>9} {'us/pt':>6} {'ratio':>6}  accuracy (seedtrack | trackpy)")
+    per_size = {}
+    for count, repeats in zip(args.sizes, args.repeats):
+        table, truth = walkers(count, args.frames, seed=1)
+        ours, theirs, mine, peer = compare(table, repeats)
+        per_size[count] = (ours, len(table))
+        said = f"{accuracy(mine, truth)} | {accuracy(peer, truth)}"
+        print(f"{f'walkers {count}/frame':>22} {ours:11.2f} {theirs:9.2f} {1e6 * ours / len(table):6.1f} {ours / theirs:6.2f}  {said}")
+    with tempfile.TemporaryDirectory() as folder:
+        table = bulk_points(args.bulk, folder)
+    if table is not None:
+        ours, theirs, mine, peer = compare(table, 1)
+        frames = table.frame.nunique()
+        said = f"{mine.track_id.nunique()} tracks, {len(mine) / frames:.0f} rows/frame | {peer.particle.nunique()} tracks"
+        print(f"{'bulk water ' + str(len(table)):>22} {ours:11.2f} {theirs:9.2f} {1e6 * ours / len(table):6.1f} {ours / theirs:6.2f}  {said}")
+    (low, low_points), (high, high_points) = per_size[args.sizes[1]], per_size[args.sizes[2]]
+    slope = math.log(high / low) / math.log(high_points / low_points)
+    print(f"log-log slope of seedtrack's CPU, {args.sizes[1]} to {args.sizes[2]} points a frame: {slope:.2f}")
+
+
+if __name__ == "__main__":
+    main()
