@@ -27,6 +27,7 @@ from seedtrack.data.errors import DataError, warn
 from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import FrameSource, open_frames, read_mask
 from seedtrack.data.trackfile import write_tracks
+from seedtrack.data.video import PREVIEW_PRESET
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
@@ -292,7 +293,8 @@ def _annotate_pair(frame: tuple[int, np.ndarray], span: tuple[float, float], **o
 def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = DetectionSettings(), tracking: TrackingSettings = TrackingSettings(), workers: int = 1) -> tuple[Detections, Tracks]:
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
-    Detection is :func:`detect_clip`, tracking :func:`track_frames`. Detection and drawing use
+    Detection is :func:`detect_clip`, tracking :func:`track_frames`; the overlay is a preview,
+    encoded with x264's :data:`~seedtrack.data.video.PREVIEW_PRESET`. Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking; the files are the same for any number.
 
@@ -310,7 +312,7 @@ def run_pipeline(clip: Path, out: Path, detection: DetectionSettings = Detection
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
-        with VideoEncoder(out / "overlay.mp4", found.fps, workers) as encoder:
+        with VideoEncoder(out / "overlay.mp4", found.fps, workers, PREVIEW_PRESET) as encoder:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking)
             write_tracks(out / "tracks.csv", tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)
