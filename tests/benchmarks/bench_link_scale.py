@@ -23,8 +23,11 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import platform
 import re
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -124,6 +127,7 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=10)
     parser.add_argument("--repeats", type=int, nargs=3, default=[5, 3, 1], help="per size")
     parser.add_argument("--bulk", help="detections csv of the bulk-water clip")
+    parser.add_argument("--markdown", help="also write the table to this Markdown file")
     args = parser.parse_args()
     import trackpy
 
@@ -132,25 +136,58 @@ def main() -> None:
     warm, _ = walkers(args.sizes[0], args.frames, seed=99)
     compare(warm, 1)
 
-    print(f"{'points':>22} {'seedtrack s':>11} {'trackpy s':>9} {'us/pt':>6} {'ratio':>6}  accuracy (seedtrack | trackpy)")
+    rows = []
+    print(f"{'points':>24} {'seedtrack s':>11} {'trackpy s':>9} {'us/pt':>6} {'ratio':>6}  accuracy (seedtrack | trackpy)")
+
+    def show(name: str, count: int, ours: float, theirs: float, said: str) -> None:
+        rows.append((name, count, ours, theirs, said))
+        print(f"{name:>24} {ours:11.2f} {theirs:9.2f} {1e6 * ours / count:6.1f} {ours / theirs:6.2f}  {said}", flush=True)
+
     per_size = {}
     for count, repeats in zip(args.sizes, args.repeats):
         table, truth = walkers(count, args.frames, seed=1)
         ours, theirs, mine, peer = compare(table, repeats)
         per_size[count] = (ours, len(table))
-        said = accuracy(mine, peer, table, truth, idf1=count <= IDF1_UP_TO)
-        print(f"{f'walkers {count}/frame':>22} {ours:11.2f} {theirs:9.2f} {1e6 * ours / len(table):6.1f} {ours / theirs:6.2f}  {said}")
+        show(f"walkers {count:,}/frame", len(table), ours, theirs, accuracy(mine, peer, table, truth, idf1=count <= IDF1_UP_TO))
     with tempfile.TemporaryDirectory() as folder:
         table = bulk_points(args.bulk, folder)
     if table is not None:
         ours, theirs, mine, peer = compare(table, 1)
         frames = table.frame.nunique()
-        said = f"{mine.track_id.nunique()} tracks, {len(mine) / frames:.0f} rows/frame | {peer.particle.nunique()} tracks"
-        print(f"{'bulk water ' + str(len(table)):>22} {ours:11.2f} {theirs:9.2f} {1e6 * ours / len(table):6.1f} {ours / theirs:6.2f}  {said}")
+        show(f"bulk water, {frames} frames", len(table), ours, theirs, f"{mine.track_id.nunique():,} tracks | {peer.particle.nunique():,} tracks")
     (low, low_points), (high, high_points) = per_size[args.sizes[1]], per_size[args.sizes[2]]
     slope = math.log(high / low) / math.log(high_points / low_points)
-    print(f"log-log slope of seedtrack's CPU, {args.sizes[1]} to {args.sizes[2]} points a frame: {slope:.2f}")
+    said = f"log-log slope of seedtrack's CPU, {args.sizes[1]:,} to {args.sizes[2]:,} points a frame: {slope:.2f}"
+    print(said)
+    if args.markdown:
+        write_markdown(Path(args.markdown), rows, said, args)
 
+
+# The table's place in a Markdown page: between these lines, the rest of the page kept.
+BEGIN, END = "<!-- bench_link_scale.py: begin (written by the script) -->", "<!-- bench_link_scale.py: end -->"
+
+
+def write_markdown(path: Path, rows: list, slope: str, args: argparse.Namespace) -> None:
+    """The table as printed, with the machine's load and the command, into ``path`` between
+    ``BEGIN`` and ``END`` (the whole file when it has no such lines)."""
+    load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
+    lines = [
+        BEGIN,
+        f"`python tests/benchmarks/bench_link_scale.py {' '.join(sys.argv[1:])}` on {platform.node()} "
+        f"({os.cpu_count()} cores, load average {load} at the end), {time.strftime('%Y-%m-%d %H:%M %Z')}; "
+        f"{args.frames} frames of walkers, CPU seconds in one process, medians of {'/'.join(map(str, args.repeats))} runs.",
+        "",
+        "| points | seedtrack, s | trackpy, s | seedtrack, us/point | seedtrack / trackpy | accuracy (seedtrack \\| trackpy) |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for name, count, ours, theirs, said in rows:
+        lines.append(f"| {name} ({count:,} points) | {ours:.2f} | {theirs:.2f} | {1e6 * ours / count:.1f} | {ours / theirs:.2f} | {said.replace('|', chr(92) + '|')} |")
+    lines += ["", slope[0].upper() + slope[1:] + ".", END]
+    table = "\n".join(lines)
+    page = path.read_text(encoding="utf-8") if path.exists() else ""
+    if BEGIN in page and END in page:
+        table = page[: page.index(BEGIN)] + table + page[page.index(END) + len(END) :]
+    path.write_text(table if table.endswith("\n") else table + "\n", encoding="utf-8")
 
 if __name__ == "__main__":
     main()
