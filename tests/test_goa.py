@@ -179,11 +179,12 @@ def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed):
     from seedtrack.tracking.initialisation import pairs_within
 
     rng = np.random.default_rng(seed)
-    origins = rng.integers(0, 40, (300, 2)).astype(float)
-    points = rng.integers(0, 40, (400, 2)).astype(float)
-    radius = rng.integers(0, 12, 300).astype(float)
-    radius[rng.random(300) < 0.02] = np.inf
+    n = 1500  # above the count below which each origin is queried alone
+    origins = rng.integers(0, 80, (n, 2)).astype(float)
+    points = rng.integers(0, 80, (400, 2)).astype(float)
+    radius = rng.integers(0, 12, n).astype(float)
+    radius[rng.random(n) < 0.01] = np.inf
     found = cKDTree(points).query_ball_point(origins, radius)
     owner, target = pairs_within(origins, radius, points)
-    np.testing.assert_array_equal(owner, np.repeat(np.arange(300), [len(f) for f in found]))
+    np.testing.assert_array_equal(owner, np.repeat(np.arange(n), [len(f) for f in found]))
     np.testing.assert_array_equal(target, np.concatenate([np.asarray(f, dtype=np.int64) for f in found]))
