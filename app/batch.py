@@ -69,6 +69,9 @@ class ClipResult:
         Wall time the clip took on its worker (0 when skipped).
     error : str
         The one-line error of a failure, else empty.
+    said : str
+        What the run said on how it detected and tracked (its detector and motion lines, joined
+        by "; "), for the command's line per clip; not in ``batch.csv``.
     """
 
     input: str
@@ -77,6 +80,7 @@ class ClipResult:
     tracks: int = 0
     seconds: float = 0.0
     error: str = ""
+    said: str = ""
 
 
 def clip_names(inputs: Sequence[Path]) -> list[str]:
@@ -133,9 +137,11 @@ def run_clip(clip: str, shown: str, folder: str, marker: str, options: RunOption
 
     Errors of the clip (unreadable, bad options for it, or any other failure) become a failed
     result with a one-line error rather than an exception, so that one clip cannot stop the
-    others. What the run prints (its motion line, progress bars) is not shown.
+    others. What the run prints on standard output (its detector and motion lines) comes back
+    in the result; its progress bars are not shown.
     """
-    with _ONE_CLIP_AT_A_TIME, contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    said = io.StringIO()
+    with _ONE_CLIP_AT_A_TIME, contextlib.redirect_stdout(said), contextlib.redirect_stderr(io.StringIO()):
         start = time.perf_counter()
         try:
             detections, tracks = run_pipeline(
@@ -147,7 +153,8 @@ def run_clip(clip: str, shown: str, folder: str, marker: str, options: RunOption
             message = one_line(error, with_type=not expected).replace(clip, shown)
             return ClipResult(shown, "failed", seconds=time.perf_counter() - start, error=message)
         seconds = time.perf_counter() - start
-        result = ClipResult(shown, "done", len(detections.frame_indices), tracks.n_tracks, seconds)
+        lines = "; ".join(line for line in said.getvalue().splitlines() if line.strip())
+        result = ClipResult(shown, "done", len(detections.frame_indices), tracks.n_tracks, seconds, said=lines)
         record = {"input": clip, "shown": shown, "options": options.fingerprint(), "frames": result.frames, "tracks": result.tracks}
         Path(marker).parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(marker) as temporary:

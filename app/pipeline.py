@@ -31,6 +31,7 @@ from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import IMAGE_SUFFIXES, FrameSource, open_frames, read_mask
 from seedtrack.data.outputset import MANIFEST, RUN_FILES, output_set
 from seedtrack.data.trackfile import write_tracks
+from seedtrack.data.video import PREVIEW_PRESET
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
@@ -472,7 +473,8 @@ def run_pipeline(
     """Detect, track, and write ``detections.csv``, ``tracks.csv`` and ``overlay.mp4`` to ``out``.
 
     Detection is :func:`detect_clip`, tracking :func:`track_frames` (``verbose``: the motion in
-    detail). Detection and drawing use
+    detail); the overlay is a preview, encoded with x264's
+    :data:`~seedtrack.data.video.PREVIEW_PRESET`. Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking; the files are the same for any number.
 
@@ -495,7 +497,7 @@ def run_pipeline(
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
-        with VideoEncoder(paths["overlay.mp4"], found.fps, workers) as encoder:
+        with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET) as encoder:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
             write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
             _render(clip, tracks, detections, encoder, TRAIL, detection, workers)

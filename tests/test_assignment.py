@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from seedtrack.tracking import assignment
 from seedtrack.tracking.assignment import UNASSIGNED, solve_dense, solve_sparse, solve_split
 
 
@@ -72,3 +73,25 @@ def test_sparse_agrees_with_dense_on_one_crowded_component(seed, corner):
     dense = solve_dense(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
     sparse = solve_sparse(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
     np.testing.assert_array_equal(dense, sparse)
+
+
+@pytest.mark.parametrize("corner", [0.0, 0.1])
+def test_split_solves_many_components_in_batches_as_in_one_sparse_solve(corner, monkeypatch):
+    # Thousands of crowded components, more pairs than one batch holds: the batches must give
+    # exactly the one solve's assignment, ties included (weights on a coarse grid tie often).
+    rng = np.random.default_rng(5)
+    heads, measurements, weights = [], [], []
+    n_heads = n_measurements = 0
+    for _ in range(1500):
+        h, m = rng.integers(2, 5, size=2)
+        head, measurement, _ = random_problem(rng, h, m, density=0.7)
+        heads.append(head + n_heads)
+        measurements.append(measurement + n_measurements)
+        weights.append(rng.integers(0, 8, head.size) * 0.0125)
+        n_heads, n_measurements = n_heads + h, n_measurements + m
+    head, measurement, weight = np.concatenate(heads), np.concatenate(measurements), np.concatenate(weights)
+    assert head.size > 2 * assignment._BATCH_PAIRS
+    split = solve_split(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    monkeypatch.setattr(assignment, "_BATCH_PAIRS", head.size)
+    whole = solve_split(n_heads, n_measurements, head, measurement, weight, 0.1, corner)
+    np.testing.assert_array_equal(split, whole)

@@ -50,8 +50,11 @@ def test_each_clip_gets_the_files_run_writes(scheduler, clips, tmp_path, capsys)
     assert list(table["frames"]) == ["6", "0", "6"]
     assert "broken.mp4: not a video" in table["error"][1] and table["error"][0] == ""
     assert not (tmp_path / "batch" / "broken").exists()
-    err = capsys.readouterr().err
-    assert "broken.mp4: not a video" in err and "Traceback" not in err
+    said = capsys.readouterr()
+    assert "broken.mp4: not a video" in said.err and "Traceback" not in said.err
+    # A line per clip done, with how it was detected and tracked.
+    lines = [line for line in said.out.splitlines() if line.startswith(inputs[0] + ": 6 frames")]
+    assert len(lines) == 1 and "detector: " in lines[0] and "motion: " in lines[0], said.out
 
 
 def test_a_rerun_skips_the_clips_done_and_retries_the_failed(scheduler, clips, tmp_path):

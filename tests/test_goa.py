@@ -167,3 +167,24 @@ def test_given_heads_keep_their_columns_and_the_others_are_associated_around_the
     initial = np.array([[0, UNASSIGNED, 0], [1, UNASSIGNED, UNASSIGNED]])
     rows = goa_pass(frames, initial, GOAConfig(d_max=8.0), given=np.array([3, 2]))
     assert rows.tolist() == [[0, -1, 0, 0, 0], [1, -1, 1, 1, 1]]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed):
+    # Integer positions and radii put points exactly on the circles (3-4-5 steps): the exact
+    # test must keep them as query_ball_point does; radii of several sizes and infinite ones
+    # go through the classes and the all-points path.
+    from scipy.spatial import cKDTree
+
+    from seedtrack.tracking.initialisation import pairs_within
+
+    rng = np.random.default_rng(seed)
+    n = 1500  # above the count below which each origin is queried alone
+    origins = rng.integers(0, 80, (n, 2)).astype(float)
+    points = rng.integers(0, 80, (400, 2)).astype(float)
+    radius = rng.integers(0, 12, n).astype(float)
+    radius[rng.random(n) < 0.01] = np.inf
+    found = cKDTree(points).query_ball_point(origins, radius)
+    owner, target = pairs_within(origins, radius, points)
+    np.testing.assert_array_equal(owner, np.repeat(np.arange(n), [len(f) for f in found]))
+    np.testing.assert_array_equal(target, np.concatenate([np.asarray(f, dtype=np.int64) for f in found]))

@@ -143,3 +143,14 @@ def test_probe_rejects_missing_and_non_video_files(tmp_path):
     text.write_text("not a video\n" * 100)
     with pytest.raises(DataError, match="not a video"):
         probe_video(text)
+
+
+def test_the_preview_preset_is_the_one_x264_writes_into_the_file(tmp_path):
+    # x264 records its settings in the stream: ultrafast turns CABAC off, veryfast keeps it.
+    from seedtrack.data.video import PREVIEW_PRESET
+
+    frames = [np.full((32, 48, 3), 40 * k, np.uint8) for k in range(3)]
+    write_video(tmp_path / "preview.mp4", frames, 25.0, preset=PREVIEW_PRESET)
+    write_video(tmp_path / "default.mp4", frames, 25.0)
+    assert b"cabac=0" in (tmp_path / "preview.mp4").read_bytes()
+    assert b"cabac=1" in (tmp_path / "default.mp4").read_bytes()

@@ -10,6 +10,7 @@ continuation for one frame by chance, but hardly for several in a row.
 
 from __future__ import annotations
 
+import itertools
 from typing import Sequence
 
 import numpy as np
@@ -29,17 +30,58 @@ _CONTINUATIONS = 3
 # 80/80 up to 0.5 and fail at 1 (the paper's IM1 alone).
 _NEAREST_SHARE = 0.3
 _LINEAR_IM1 = NearestNeighbour()
+# pairs_within searches origins whose radii are within this factor of each other together.
+_RADIUS_CLASS = 1.5
+# Below this many origins pairs_within asks one query per origin: a few trees cost more than the
+# queries (100 origins: 0.06 ms against 0.17; equal about 1,200).
+_ONE_QUERY_EACH_BELOW = 1000
+_SMALLEST_RADIUS = 1e-300
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """All (origin, point) index pairs with the point within the origin's radius."""
+    """All (origin, point) index pairs with the point within the origin's radius (pixels),
+    ordered by origin, then by point: the pairs of cKDTree.query_ball_point, found faster.
+
+    Origins whose radii are within a factor _RADIUS_CLASS of each other are searched together,
+    one tree against the other at their largest radius, then each pair is kept by the test
+    query_ball_point makes (squared distance at most the squared radius). One query per origin,
+    with a Python list of its points, took 1.9 us an origin at 10,000 a frame and 2.9 at 100,000
+    (their queries in random order miss the cache); this takes about a quarter of that with radii
+    alike. Fewer origins than _ONE_QUERY_EACH_BELOW are queried one by one, which costs less there.
+    """
+    empty = np.empty(0, np.int64)
     if origins.shape[0] == 0 or points.shape[0] == 0:
-        return np.empty(0, np.int64), np.empty(0, np.int64)
-    found = cKDTree(points).query_ball_point(origins, radius)
-    counts = np.fromiter((len(f) for f in found), dtype=np.int64, count=len(found))
-    owner = np.repeat(np.arange(len(found)), counts)
-    target = np.fromiter((j for f in found for j in f), dtype=np.int64, count=int(counts.sum()))
-    return owner, target
+        return empty, empty
+    if origins.shape[0] < _ONE_QUERY_EACH_BELOW:
+        found = cKDTree(points).query_ball_point(origins, radius)
+        counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+        return np.repeat(np.arange(len(found)), counts), np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
+    radius = np.broadcast_to(np.asarray(radius, dtype=float), origins.shape[:1])
+    reach = np.abs(radius)
+    owners, targets = [], []
+    everywhere = np.flatnonzero(np.isinf(reach))
+    if everywhere.size:
+        owners.append(np.repeat(everywhere, points.shape[0]))
+        targets.append(np.tile(np.arange(points.shape[0]), everywhere.size))
+    finite = np.flatnonzero(np.isfinite(reach))
+    if finite.size:
+        tree = cKDTree(points)
+        size_class = np.floor(np.log(np.maximum(reach[finite], _SMALLEST_RADIUS)) / np.log(_RADIUS_CLASS))
+        for label in np.unique(size_class):
+            members = finite[size_class == label]
+            # A hair beyond the largest radius, so that the search's rounding loses no pair the
+            # exact test below keeps.
+            found = cKDTree(origins[members]).sparse_distance_matrix(tree, float(reach[members].max()) * (1 + 1e-9), output_type="ndarray")
+            owners.append(members[found["i"]])
+            targets.append(found["j"])
+    if not owners:
+        return empty, empty
+    owner, target = np.concatenate(owners), np.concatenate(targets)
+    step = points[target] - origins[owner]
+    kept = step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1] <= radius[owner] * radius[owner]
+    owner, target = owner[kept], target[kept]
+    order = np.argsort(owner * points.shape[0] + target)
+    return owner[order], target[order]
 
 
 def first_links(

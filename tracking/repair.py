@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .initialisation import pairs_within
 from .persistence import MotionStatistics, _predicted, _turned
 from .tracks import NO_MEASUREMENT, Tracks
 
@@ -95,21 +96,27 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
             if into.any():
                 step[into] = xy[rows[into], k] - xy[rows[into], k - 1] - drift
             sigma = np.sqrt(statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", step, step))
-            tree = cKDTree(xy[rows, k])
-            pairs = [tree.query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
+            here = xy[rows, k]
+            pairs = [cKDTree(here).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
             # A track that changes its velocity at k beyond the encounter distance may hold a
             # neighbour's point there (taken after a wrong link nearby): its pairs reach to the gate.
             both = np.flatnonzero(into & out)
             change = np.zeros((0, 2)) if not both.size else xy[rows[both], k + 1] - xy[rows[both], k] - drift - statistics.persistence * _turned(step[both], statistics.turn)
             kinked = both[np.hypot(*change.T) > _ENCOUNTER_SIGMAS * sigma[both]]
-            for a in kinked:
-                near = np.asarray(tree.query_ball_point(xy[rows[a], k], _KINK_REACH * sigma[a]), dtype=np.int64)
-                pairs.append(np.column_stack((np.full(near.size, a), near))[near != a])
+            if kinked.size:
+                owner, near = pairs_within(here[kinked], _KINK_REACH * sigma[kinked], here)
+                pairs.append(np.column_stack((kinked[owner], near))[kinked[owner] != near])
             if not any(p.size for p in pairs):
                 continue
-            a, b = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0).T
+            # Each pair once, smaller index first, in order: as one number per pair, which sorts
+            # as the pairs do (np.unique over rows gives the same, several times slower).
+            ordered = np.sort(np.concatenate(pairs), axis=1)
+            key = np.unique(ordered[:, 0] * rows.size + ordered[:, 1])
+            a, b = key // rows.size, key % rows.size
             i, j = rows[a], rows[b]
-            kink = np.isin(a, kinked) | np.isin(b, kinked)
+            is_kinked = np.zeros(rows.size, bool)
+            is_kinked[kinked] = True
+            kink = is_kinked[a] | is_kinked[b]
             close = np.hypot(*(xy[i, k] - xy[j, k]).T) <= _ENCOUNTER_SIGMAS * np.maximum(sigma[a], sigma[b])
             # Every pair weighed at once on the tracks as they are; one after another, as an
             # exchange changes its two tracks, pairs that hold one of them are weighed again.

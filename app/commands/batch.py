@@ -67,6 +67,9 @@ def run(args: argparse.Namespace) -> int:
         def show(result: ClipResult) -> None:
             if result.status == "failed":
                 tqdm.write(f"seedtrack batch: {result.error}", file=sys.stderr)
+            elif result.status == "done":
+                done = f"{result.input}: {counted(result.frames, 'frame')}, {counted(result.tracks, 'track')} in {result.seconds:.1f} s"
+                tqdm.write(f"{done}; {result.said}" if result.said else done, file=sys.stdout)
             bar.update(1)
 
         results = run_batch(client, args.inputs, args.out, options, on_result=show)
