@@ -256,6 +256,15 @@ def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config
     into = config.individual.cost(bridge, config.phi_max, scale)
     out = config.individual.cost(leaving, config.phi_max, scale)
     valid = (into <= config.phi_max) & (out <= config.phi_max)
+    odds = config.individual.join_costs(bridge, leaving, config.phi_max) if hasattr(config.individual, "join_costs") else None
+    if odds is not None:
+        # A measured model weighs each join against the end and the start being two objects,
+        # within its gate: a join is made when it is the likelier, the likeliest set together.
+        valid &= odds < 0
+        end, start, weight = end[valid], start[valid], odds[valid]
+        unmatched = -float(weight.min(initial=0.0)) / 2
+        weight = weight + 2 * unmatched
+        return _chain(assignment, solve_split(n_tracks, n_tracks, end, start, weight, unmatched))
     end, start, gap = end[valid], start[valid], gap[valid]
     weight = into[valid] + out[valid] + (gap - 1) * config.phi_max
     # Leaving an end and a start apart costs more than any valid join, so every join that does

@@ -284,6 +284,8 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
             f"noisy motion: steps keep their direction (median turning cosine {persistence:.2f}) but vary too much "
             f"for the smooth-motion model ({_ROUGH_QUANTILE:.0%} of {triplets} chains cost up to {rough:.2f})"
         )
+    elif persistence <= -_PERSISTENT:
+        why = f"reversing motion: steps turn back (median turning cosine {persistence:.2f} over {triplets} chains)"
     else:
         why = f"random motion: steps turn at random (median turning cosine {persistence:.2f} over {triplets} chains)"
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
