@@ -81,3 +81,20 @@ def test_unseen_kinds_draw_the_objects_asked_for():
     frames, truth = generate_unseen(UnseenSpec(kind="relay", points=10, frames=20, random_seed=3))
     first, last = truth.spans()
     assert (first > 0).any() and (last < 19).any()
+
+
+def test_the_crossing_repair_weighs_a_bounded_number_of_pairs(monkeypatch):
+    # A swarm whose nearest neighbour is within a step: every track kinks near many others, and
+    # pairs were weighed again one at a time without end (28 of 32 s of CPU on 3,000 points).
+    from seedtrack.tracking import repair
+    from seedtrack.tracking.persistence import MotionStatistics
+
+    frames, _ = generate_unseen(UnseenSpec(kind="swarm", points=150, speed=4.0, size=80.0, frames=20, random_seed=0))
+    tracks, _ = link_goa(frames, motion="random")
+    calls = []
+    weigh = repair._pairings
+    monkeypatch.setattr(repair, "_pairings", lambda *args: calls.append(1) or weigh(*args))
+    stats = MotionStatistics(0.9, 0.5, 0.2, (0.0, 0.0), 4.0, 1000)
+    repair.resolve_crossings(tracks, stats)
+    points = sum(f.shape[0] for f in frames)
+    assert 0 < len(calls) <= repair._SWEEPS * len(frames) + repair._REWEIGHED_SHARE * points
