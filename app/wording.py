@@ -26,7 +26,7 @@ def motion_lines(fit, verbose: bool = False) -> list[str]:
     >>> from seedtrack.tracking.linking import link_goa
     >>> _, fit = link_goa(generate_walkers(WalkerSpec(walkers=100, frames=8, drift=(1.0, 0.0), random_seed=1))[0])
     >>> motion_lines(fit)  # doctest: +ELLIPSIS
-    ['motion: random motion (persistence 0.0..., noise ... px/frame, drift (...) px/frame), speed limit ... px/frame']
+    ['motion: random motion (persistence ..., noise ... px/frame, drift (...) px/frame), speed limit ... px/frame']
     """
     config = fit.config
     limit = "no speed limit" if config.d_max is None else f"speed limit {config.d_max:.1f} px/frame"
@@ -36,7 +36,7 @@ def motion_lines(fit, verbose: bool = False) -> list[str]:
         # first look (which may have seen the same points otherwise).
         statistics = config.individual.statistics
         persistence = statistics.persistence
-        kind = "smooth" if persistence >= _SMOOTH else "random" if persistence <= _RANDOM else "partly smooth"
+        kind = "smooth" if persistence >= _SMOOTH else "reversing" if persistence <= -_RANDOM else "random" if persistence <= _RANDOM else "partly smooth"
         measured = ", ".join(filter(None, (f"persistence {persistence:.2f}", f"noise {statistics.noise:.2f} px/frame", drift)))
         line = f"motion: {kind} motion ({measured}), {limit}"
         details = [f"  first look, on unambiguous 3-frame chains: {fit.choice.reason}", f"  measured on a first pass, then tracked with: {fit.measured}"]
@@ -48,6 +48,7 @@ def motion_lines(fit, verbose: bool = False) -> list[str]:
     return [line, *details] if verbose else [line]
 
 
-# Measured velocity persistence at or above which motion is called smooth, at or below which random.
+# Measured velocity persistence at or above which motion is called smooth, at or below which
+# random; at or below minus the random bound, steps turn back: reversing.
 _SMOOTH = 0.7
 _RANDOM = 0.3

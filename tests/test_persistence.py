@@ -175,6 +175,9 @@ def test_the_chance_of_a_miss_is_measured_on_the_tracks():
     index[[0, 2, 4], [3, 5, 7]] = NO_MEASUREMENT
     assert measured_chains(Tracks.from_dense(xy, index)).missed == pytest.approx(4 / 62)
     assert fit_statistics(Tracks.from_dense(xy, index)).missed == pytest.approx(4 / 62)
+    # A long gap (a join of two objects, most likely) is not taken for misses.
+    index[1, 2:8] = NO_MEASUREMENT
+    assert measured_chains(Tracks.from_dense(xy, index)).missed == pytest.approx(4 / 62)
 
 
 def test_a_sudden_reversal_beats_a_slave_only_when_likelier_than_a_miss():

@@ -34,6 +34,9 @@ from .tracks import NO_MEASUREMENT, Tracks
 
 # The measured speed limit is this many times the fastest speed that fits the motion.
 SPEED_MARGIN = 2.0
+# The first pass's speed limit is this many times the fastest unambiguous step, where those show
+# the fastest speed (regime.MotionChoice.clear_speed).
+FIRST_PASS_MARGIN = 3.0
 # Sigmas from the prediction at which a link costs as much as a slave, chosen on the tuning seeds
 # of tests/benchmarks/bench_held_out.py among 6, 9 and 12: real velocity changes have longer tails
 # than a Gaussian (speed steps along the track, turns across it), and a true link beyond the gate
@@ -158,6 +161,12 @@ def first_pass(frames: list[np.ndarray], config: GOAConfig, track: Track) -> tup
     """
     choice = choose_motion(frames, "auto")
     fitted, drift = fit_motion(replace(config, d_max=None), choice)
+    if choice.individual_model == "im2" and choice.clear_speed is not None:
+        # Smooth motion slow for its spacing: the unambiguous steps show its fastest speed, and
+        # the first pass is held to a few times it. Without a limit it joined an object's last
+        # point to the first point of one that entered far away (160 px a frame where the
+        # fastest was 5), and the motion measured on those tracks let the next passes join too.
+        fitted = replace(fitted, d_max=max(FIRST_PASS_MARGIN * choice.clear_speed, 1.0))
     return track_without_drift(frames, drift, lambda moved: track(moved, fitted)), MotionFit(choice, fitted, drift)
 
 

@@ -11,7 +11,9 @@ velocity) is joined to the start of track B (first point and velocity) across ``
 frames when both moves through the bridge, from A's velocity to the bridging velocity and from
 it to B's, pass the individual motion model within phi_max. A join costs the two links' costs
 plus phi_max for every missed frame (the cost of a slave), so short, smooth bridges win; the
-joins are chosen together by one optimal assignment of ends to starts.
+joins are chosen together by one optimal assignment of ends to starts. With a measured motion
+model a join is made only where it is likelier than the end and the start being two objects
+(:meth:`seedtrack.tracking.persistence.PersistentModel.join_costs`).
 """
 
 from __future__ import annotations
@@ -256,6 +258,15 @@ def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config
     into = config.individual.cost(bridge, config.phi_max, scale)
     out = config.individual.cost(leaving, config.phi_max, scale)
     valid = (into <= config.phi_max) & (out <= config.phi_max)
+    odds = config.individual.join_costs(bridge, leaving) if hasattr(config.individual, "join_costs") else None
+    if odds is not None:
+        # A measured model weighs each join against the end and the start being two objects,
+        # within its gate: a join is made when it is the likelier, the likeliest set together.
+        valid &= odds < 0
+        end, start, weight = end[valid], start[valid], odds[valid]
+        unmatched = -float(weight.min(initial=0.0)) / 2
+        weight = weight + 2 * unmatched
+        return _chain(assignment, solve_split(n_tracks, n_tracks, end, start, weight, unmatched))
     end, start, gap = end[valid], start[valid], gap[valid]
     weight = into[valid] + out[valid] + (gap - 1) * config.phi_max
     # Leaving an end and a start apart costs more than any valid join, so every join that does

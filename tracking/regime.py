@@ -57,6 +57,10 @@ _MIN_TRIPLET_FRACTION = 0.05
 # phi_max of a missed point: on random walkers 5 sigma linked better than 4 (IDF1 0.979 against
 # 0.967 at sigma 1.5 px, 0.947 against 0.942 with 5% missed) and no worse than 6 to 10.
 _SIGMAS = 5.0
+# The unambiguous steps tell the motion's fastest speed (this quantile of their lengths) when that
+# is below this share of their median bound: the bound then cut few of them short.
+_CLEAR_QUANTILE = 0.99
+_UNCUT_SHARE = 0.5
 # Positions are rarely better than a tenth of a pixel; the limit never falls below this.
 _MIN_SPEED = 1.0
 
@@ -82,6 +86,10 @@ class MotionChoice:
         Median step (x, y), pixels/frame, of random motion; (0, 0) otherwise.
     reason : str
         One line saying why, for the user.
+    clear_speed : float or None
+        99th percentile of the unambiguous steps' lengths, pixels/frame, where they are not held
+        short by the spacing they must be under (then it is the motion's own fastest speed);
+        None where they are, or where too few steps are unambiguous to tell.
     """
 
     individual_model: str
@@ -90,6 +98,7 @@ class MotionChoice:
     triplets: int
     reason: str
     drift: tuple[float, float] = (0.0, 0.0)
+    clear_speed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -272,12 +281,14 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
         return _random(frames, links, reaches, float("nan"), 0, "random motion, as asked")
     first, second = unambiguous_triplets(frames, links)
     triplets = first.shape[0]
+    clear = _clear_speed(frames, links, reaches)
     mean_points = float(np.mean([f.shape[0] for f in frames])) if frames else 0.0
     needed = max(_MIN_TRIPLETS, int(np.ceil(_MIN_TRIPLET_FRACTION * mean_points)))
     if triplets < needed:
         return MotionChoice(
             "im2", None, float("nan"), triplets,
             f"smooth-motion default: only {triplets} unambiguous 3-frame chains (need {needed}) to measure the motion",
+            clear_speed=clear,
         )
     lengths = np.linalg.norm(first, axis=1) * np.linalg.norm(second, axis=1)
     moving = lengths > 0
@@ -288,12 +299,15 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
         return MotionChoice(
             "im2", None, persistence, triplets,
             f"smooth motion: steps keep their direction (median turning cosine {persistence:.2f} over {triplets} chains)",
+            clear_speed=clear,
         )
     if persistence >= _PERSISTENT:
         why = (
             f"noisy motion: steps keep their direction (median turning cosine {persistence:.2f}) but vary too much "
             f"for the smooth-motion model ({_ROUGH_QUANTILE:.0%} of {triplets} chains cost up to {rough:.2f})"
         )
+    elif persistence <= -_PERSISTENT:
+        why = f"reversing motion: steps turn back (median turning cosine {persistence:.2f} over {triplets} chains)"
     else:
         why = f"random motion: steps turn at random (median turning cosine {persistence:.2f} over {triplets} chains)"
     # A half turn of frame k + 1 about its centre leaves no real link; what still links is chance.
@@ -315,6 +329,18 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
             "links would arise by chance; the motion is too fast or crowded to tell",
         )
     return _random(frames, links, reaches, persistence, triplets, why)
+
+
+def _clear_speed(frames: Sequence[np.ndarray], links: Sequence[np.ndarray], reaches: Sequence[np.ndarray]) -> float | None:
+    """99th percentile of the unambiguous steps' lengths (pixels/frame) when it lies below half
+    their median bound (so that the bound did not cut the steps short: the motion is slow for
+    its spacing), else None; None also below _MIN_TRIPLETS steps."""
+    lengths = [np.hypot(*(b[link[link >= 0]] - a[link >= 0]).T) for a, b, link in zip(frames[:-1], frames[1:], links)]
+    if sum(x.size for x in lengths) < _MIN_TRIPLETS:
+        return None
+    fastest = float(np.quantile(np.concatenate(lengths), _CLEAR_QUANTILE))
+    bound = float(np.median(np.concatenate([r[r >= 0] for r in reaches])))
+    return fastest if fastest < _UNCUT_SHARE * bound else None
 
 
 def _random(
