@@ -437,6 +437,10 @@ def test_an_edit_answers_only_the_tracks_it_changed(served):
     assert set(reply["tracks"]["track_id"]) == {12} and reply["version"] == 3
     held = _mirror(reply, held)
     assert held == _mirror(json.loads(_request(server, "GET", f"/api/state?token={server.token}")[1])), "the deltas add up to the whole state"
+    doubt = json.loads(_request(server, "GET", f"/api/doubtful?token={server.token}")[1])
+    places = doubtful_places(server.session.tracks, n_frames=12)
+    assert doubt["version"] == 3 and doubt["places"] == places and doubt["count"] == len(places)
+    assert doubt["per_frame"] == np.bincount([p["frame"] for p in places], minlength=12).tolist()
     stale = _post(server, "/api/redo", {}, version=99)
     assert stale["since"] is None and len(set(stale["tracks"]["track_id"])) == 12, "a version the server never made gets the whole state"
     assert _post(server, "/api/undo", {})["since"] is None, "no version named: the whole state"
@@ -559,3 +563,44 @@ def test_kill_9_loses_no_edit(tmp_path, dish):
 class _Address:
     def __init__(self, port, token):
         self.port, self.token = port, token
+
+
+def test_an_edit_that_cannot_be_saved_is_not_made(tmp_path, monkeypatch):
+    import errno
+
+    import seedtrack.annotate.session as module
+
+    session = Session(_empty(), tmp_path, None)
+    track = session.click(None, 0, 1.0, 2.0)
+    log = (tmp_path / CORRECTIONS).read_bytes()
+
+    def full(descriptor):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(module.os, "fsync", full)
+    with pytest.raises(EditRefused, match="No space left on device"):
+        session.click(track, 1, 3.0, 4.0)
+    monkeypatch.undo()
+    assert (tmp_path / CORRECTIONS).read_bytes() == log and _points(session.tracks) == {(track, 0): 1.0}
+    assert session.undo() and session.points == {}
+    session.close()
+
+
+def test_edits_while_tracks_csv_is_being_written_do_not_lock_up(tmp_path, monkeypatch):
+    import seedtrack.annotate.session as module
+
+    # Every edit starts a write at once, so writes and edits overlap all the time.
+    monkeypatch.setattr(module, "SAVE_DELAY", 0.0)
+    session = Session(_empty(), tmp_path, None)
+    track = session.click(None, 0, 1.0, 1.0)
+
+    def edit():
+        for frame in range(1, 150):
+            session.click(track, frame, frame + 1.0, 1.0)
+
+    worker = threading.Thread(target=edit, daemon=True)
+    worker.start()
+    worker.join(timeout=30)
+    assert not worker.is_alive(), "an edit and a write wait for each other"
+    session.close()
+    assert len(_rows(read_tracks(tmp_path / TRACKS))) == 150

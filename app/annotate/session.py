@@ -107,7 +107,10 @@ class Session:
         for edit in self.edits:
             self._line_starts.append(self._line_starts[-1] + len(_line(edit).encode()))
         self._log = os.open(saved, os.O_WRONLY | os.O_APPEND)
+        # Lock order: _write_lock before lock; _timer_lock is taken alone (an edit takes it
+        # holding lock, so it must never wait for _write_lock).
         self._write_lock = threading.Lock()
+        self._timer_lock = threading.Lock()
         self._timer: threading.Timer | None = None
         self._saved_version = -1
         self._write_tracks()
@@ -246,7 +249,7 @@ class Session:
 
     def close(self) -> None:
         """Write ``tracks.csv`` now if it lags behind the edits, and close the corrections log."""
-        with self._write_lock:
+        with self._timer_lock:
             if self._timer is not None:
                 self._timer.cancel()
         self._write_tracks()
@@ -258,17 +261,27 @@ class Session:
     # --- internals ----------------------------------------------------------------------------
 
     def _apply(self, edit: Edit, keep_redo: bool = False) -> None:
+        if self._log < 0:
+            raise EditRefused("the server is stopping; the edit was not made")
         line = Edit(edit.verb, edit.arguments, len(self.edits) + 1)
         try:
             before = self._do(line, "edit")
         except DataError as error:
             raise EditRefused(error.problem) from None
+        # The edit is on disk before it is answered: a crash after this loses nothing.
+        try:
+            data = _line(line).encode()
+            while data:
+                data = data[os.write(self._log, data) :]
+            os.fsync(self._log)
+        except OSError as error:
+            self.edits.pop()
+            self._restore(self._before.pop())
+            os.ftruncate(self._log, self._line_starts[-1])
+            raise EditRefused(f"{self.folder / CORRECTIONS}: cannot save the edit ({error.strerror}); it was not made") from None
         if not keep_redo:
             self._redo.clear()
-        # The edit is on disk before it is answered: a crash after this loses nothing.
-        os.write(self._log, _line(line).encode())
-        os.fsync(self._log)
-        self._line_starts.append(os.lseek(self._log, 0, os.SEEK_END))
+        self._line_starts.append(self._line_starts[-1] + len(_line(line).encode()))
         self._changed(before)
 
     def _do(self, edit: Edit, where: str) -> dict[int, dict | None]:
@@ -317,7 +330,7 @@ class Session:
     def _changed(self, before: dict) -> None:
         self.version += 1
         self._touched.append(frozenset(before))
-        with self._write_lock:
+        with self._timer_lock:
             if self._timer is not None:
                 self._timer.cancel()
             self._timer = threading.Timer(SAVE_DELAY, self._write_tracks)
