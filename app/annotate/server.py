@@ -24,6 +24,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
+from seedtrack.data.corrections import tracks_of
 from seedtrack.data.errors import DataError
 from seedtrack.tracking.tracks import Tracks
 
@@ -139,10 +140,7 @@ class AnnotateServer(ThreadingHTTPServer):
                 version, edits, can_redo = session.version, list(session.edits), session.can_redo
         if changed is None:
             return self.state()
-        flat = [(track, frame, *point) for track, points in kept.items() for frame, point in sorted(points.items())]
-        table = np.array(flat, dtype=float).reshape(-1, 5)
-        rows = {"track_id": table[:, 0].astype(np.int64), "frame": table[:, 1].astype(np.int64), "x": table[:, 2], "y": table[:, 3], "interpolated": table[:, 4].astype(np.int64)}
-        return _state(version, since, rows, sorted(changed - kept.keys()), edits, can_redo)
+        return _state(version, since, tracks_of(kept).to_rows(), sorted(changed - kept.keys()), edits, can_redo)
 
     def doubtful(self) -> dict:
         """The doubtful places of the tracks as they are now: the first ones and how many a frame.
