@@ -123,18 +123,58 @@ def apply_corrections(tracks: Tracks, edits: list[Edit], path) -> Tracks:
         ``FILE:LINE: problem`` for the first edit that names a missing track or point, or
         would put two points of one track in one frame.
     """
+    points = points_of(tracks)
+    for edit in edits:
+        apply_edit(points, edit, f"{path}:{edit.line}")
+    return tracks_of(points)
+
+
+def points_of(tracks: Tracks) -> dict[int, dict[int, tuple[float, float, int]]]:
+    """The tracks as ``{track id: {frame: (x, y, interpolated)}}``, the form edits apply to.
+
+    Example
+    -------
+    >>> points_of(Tracks.from_rows([4, 4], [2, 3], [1.0, 2.0], [5.0, 6.0]))
+    {4: {2: (1.0, 5.0, 0), 3: (2.0, 6.0, 0)}}
+    """
     rows = tracks.to_rows()
     points: dict[int, dict[int, tuple[float, float, int]]] = {}
     for track_id, frame, x, y, interpolated in zip(*(rows[name].tolist() for name in ("track_id", "frame", "x", "y", "interpolated"))):
         points.setdefault(track_id, {})[frame] = (x, y, interpolated)
-    for edit in edits:
-        _apply(points, edit, f"{path}:{edit.line}")
+    return points
+
+
+def tracks_of(points: dict[int, dict[int, tuple[float, float, int]]]) -> Tracks:
+    """The :class:`Tracks` that :func:`points_of` form holds (tracks without points left out).
+
+    Example
+    -------
+    >>> tracks_of({4: {3: (2.0, 6.0, 0), 2: (1.0, 5.0, 0)}}).to_rows()["frame"]
+    array([2, 3])
+    """
     flat = [(t, f, *p) for t in sorted(points) for f, p in sorted(points[t].items())]
     table = np.array(flat, dtype=float).reshape(-1, 5)
     return Tracks.from_rows(table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3], table[:, 4].astype(np.int64))
 
 
-def _apply(points: dict, edit: Edit, where: str) -> None:
+def apply_edit(points: dict, edit: Edit, where: str) -> None:
+    """Apply one edit in place to ``points`` (the :func:`points_of` form), changing only the tracks it names.
+
+    Every check is made before anything changes, so a refused edit leaves ``points`` as it was.
+
+    Raises
+    ------
+    DataError
+        ``WHERE: problem`` when the edit names a missing track or point, or would put two
+        points of one track in one frame.
+
+    Example
+    -------
+    >>> points = {1: {0: (0.0, 0.0, 0)}}
+    >>> apply_edit(points, Edit("add", (1, 1, 3.0, 4.0), 1), "edit")
+    >>> points[1][1]
+    (3.0, 4.0, 0)
+    """
     def track(track_id: int) -> dict:
         if track_id not in points:
             raise DataError(where, f"track {track_id} does not exist")

@@ -15,9 +15,9 @@ import pytest
 from seedtrack.annotate.doubt import doubtful_places
 from seedtrack.annotate.frames import FrameCache
 from seedtrack.annotate.server import AnnotateServer
-from seedtrack.annotate.session import CORRECTIONS, EXPORTS, TRACKS, Session
+from seedtrack.annotate.session import CORRECTIONS, EXPORTS, TRACKS, EditRefused, Session, edit_text
 from seedtrack.cli import main
-from seedtrack.data.corrections import Edit, apply_corrections
+from seedtrack.data.corrections import Edit, apply_corrections, read_corrections
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.trackfile import read_tracks, write_tracks
 from seedtrack.tracking.tracks import Tracks
@@ -93,6 +93,7 @@ def test_correct_reproduces_the_saved_tracks_and_exports_every_format(tmp_path, 
     session.click(0, 3, *truth.xy[0, 3])
     session.split(2, 5)
     session.click(session.click(None, 2, 1.5, 2.5), 3, 2.5, 3.5)
+    session.close()  # tracks.csv is written a moment after the last edit, or now
     assert main(["correct", str(folder / "wrong.csv"), str(tmp_path / CORRECTIONS), "--out", str(tmp_path / "again.csv")]) == 0
     assert (tmp_path / "again.csv").read_bytes() == (tmp_path / TRACKS).read_bytes()
     written = session.export()
@@ -300,15 +301,17 @@ def test_three_wrong_links_fixed_by_two_actions_each(browser, dish, tmp_path):
     page = Page(browser, server)
     truth_xy = {int(track): truth.xy[row] for row, track in enumerate(truth.track_ids)}
     for _ in SWAPS:
+        # The doubtful places follow an edit a moment later, apart from its answer.
+        _wait(browser, "return window.annotate.state.doubtVersion === window.annotate.state.version")
         page.key("n")  # to the most doubtful place: the page selects the track there
         frame, track = page.state("frame"), page.state("selected")
-        before = page.browser.execute_script("return window.annotate.state.rows.x.length")
-        assert before
+        assert page.browser.execute_script("return window.annotate.state.tracks.size") == truth.n_tracks
         # Up to the wrong link the track is its true self: the true track it was in the frame before.
         previous = server.session.tracks.xy[list(server.session.tracks.track_ids).index(track), frame - 1]
         true_id = next(t for t, xy in truth_xy.items() if np.allclose(xy[frame - 1], previous))
         page.click(*truth_xy[true_id][frame], shift=True)
     server.shutdown()
+    server.session.close()
     assert page.actions == 2 * len(SWAPS)
     assert _rows(read_tracks(tmp_path / TRACKS)) == _rows(truth)
     assert [line.split()[0] for line in (tmp_path / CORRECTIONS).read_text().splitlines() if not line.startswith("#")] == ["swap"] * 3
@@ -354,6 +357,7 @@ def test_ground_truth_from_nothing_by_clicks(browser, tmp_path):
             assert page.state("frame") == frame
             page.click(*truth.xy[row, frame])
     server.shutdown()
+    server.session.close()
     made = read_tracks(out / TRACKS)
     assert made.n_tracks == truth.n_tracks and made.n_frames == truth.n_frames
     assert np.abs(made.xy - truth.xy).max() < 0.5, "each point where it was clicked, to half a pixel"
@@ -425,3 +429,218 @@ def test_frames_of_an_image_folder(tmp_path):
     shades = [int(cv2.imdecode(np.frombuffer(frames.jpeg(k), np.uint8), cv2.IMREAD_GRAYSCALE).mean()) for k in (3, 1, 2, 0)]
     assert [round(shade / 60) for shade in shades] == [3, 1, 2, 0]
     frames.close()
+
+
+# --- incremental state and files -------------------------------------------------------------
+
+
+def _post(server, path, body, version=None):
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+    headers = {"Host": f"127.0.0.1:{server.port}"}
+    if version is not None:
+        headers["X-Version"] = str(version)
+    connection.request("POST", f"{path}?token={server.token}", body=json.dumps(body), headers=headers)
+    response = connection.getresponse()
+    reply = json.loads(response.read())
+    connection.close()
+    assert response.status == 200, reply
+    return reply
+
+
+def _mirror(reply, held=None):
+    """What the page holds after taking ``reply``: {track: [(frame, x, y, interpolated)]}."""
+    held = {} if reply["since"] is None else {track: list(points) for track, points in held.items()}
+    for track in reply["removed"]:
+        held.pop(track, None)
+    rows = reply["tracks"]
+    fresh = {}
+    for row in zip(rows["track_id"], rows["frame"], rows["x"], rows["y"], rows["interpolated"]):
+        fresh.setdefault(row[0], []).append(row[1:])
+    held.update(fresh)
+    return held
+
+
+def test_an_edit_answers_only_the_tracks_it_changed(served):
+    server = served
+    status, body = _request(server, "GET", f"/api/state?token={server.token}")
+    whole = json.loads(body)
+    assert status == 200 and whole["since"] is None and whole["version"] == 0
+    held = _mirror(whole)
+    reply = _post(server, "/api/split", {"track": 2, "frame": 5}, version=0)
+    assert (reply["since"], reply["version"], reply["selected"]) == (0, 1, 12)
+    assert sorted(set(reply["tracks"]["track_id"])) == [2, 12] and reply["removed"] == [], "only the split track and the new one"
+    held = _mirror(reply, held)
+    reply = _post(server, "/api/delete", {"track": 12}, version=1)
+    assert reply["tracks"]["track_id"] == [] and reply["removed"] == [12]
+    held = _mirror(reply, held)
+    reply = _post(server, "/api/undo", {}, version=2)
+    assert set(reply["tracks"]["track_id"]) == {12} and reply["version"] == 3
+    held = _mirror(reply, held)
+    assert held == _mirror(json.loads(_request(server, "GET", f"/api/state?token={server.token}")[1])), "the deltas add up to the whole state"
+    doubt = json.loads(_request(server, "GET", f"/api/doubtful?token={server.token}")[1])
+    places = doubtful_places(server.session.tracks, n_frames=12)
+    assert doubt["version"] == 3 and doubt["places"] == places and doubt["count"] == len(places)
+    assert doubt["per_frame"] == np.bincount([p["frame"] for p in places], minlength=12).tolist()
+    stale = _post(server, "/api/redo", {}, version=99)
+    assert stale["since"] is None and len(set(stale["tracks"]["track_id"])) == 12, "a version the server never made gets the whole state"
+    assert _post(server, "/api/undo", {})["since"] is None, "no version named: the whole state"
+
+
+def test_undo_and_redo_give_the_tracks_of_replaying_the_edits(tmp_path, dish):
+    folder, _ = dish
+    start = read_tracks(folder / "wrong.csv")
+    session = Session(start, tmp_path, folder / "wrong.csv")
+    rng = np.random.default_rng(5)
+    held, version, undone = _mirror(_state_of(session)), 0, 0
+    for step in range(60):
+        choice = rng.integers(0, 6)
+        frame = int(rng.integers(0, 12))
+        ids = sorted(session.points)
+        try:
+            if choice == 0:
+                session.click(int(rng.choice(ids)), frame, *rng.uniform(0, 200, 2))
+            elif choice == 1:
+                track, other = rng.choice(ids, 2, replace=False)
+                x, y = session.points[int(other)].get(frame, (-1.0, -1.0))[:2]
+                session.click(int(track), frame, x, y)
+            elif choice == 2:
+                session.split(int(rng.choice(ids)), frame)
+            elif choice == 3:
+                session.delete(int(rng.choice(ids)), frame if rng.random() < 0.7 else None)
+            elif choice == 4:
+                undone += session.undo()
+            else:
+                session.redo()
+        except EditRefused:
+            pass
+        expected = apply_corrections(start, session.edits, "replayed")
+        assert _rows(session.tracks) == _rows(expected), step
+        assert [edit_text(edit) for edit in read_corrections(tmp_path / CORRECTIONS)] == [edit_text(edit) for edit in session.edits], "the log is the edits"
+        held = _mirror(_delta_of(session, version), held)
+        version = session.version
+        assert held == _mirror(_state_of(session)), step
+    assert undone > 5 and len(session.edits) > 10
+    session.close()
+    assert _rows(read_tracks(tmp_path / TRACKS)) == _rows(session.tracks)
+
+
+def _state_of(session):
+    return AnnotateServer.state(_Stub(session))
+
+
+def _delta_of(session, since):
+    return AnnotateServer.delta(_Stub(session), since)
+
+
+class _Stub:
+    """The part of a server that states and deltas read, without a socket."""
+
+    def __init__(self, session):
+        self.session = session
+
+    def state(self):
+        return AnnotateServer.state(self)
+
+
+def test_tracks_csv_is_written_once_for_a_burst_of_edits(tmp_path, monkeypatch):
+    import seedtrack.annotate.session as module
+
+    writes = []
+    monkeypatch.setattr(module, "write_tracks", lambda path, tracks, **kw: writes.append(tracks.n_tracks) or write_tracks(path, tracks, **kw))
+    monkeypatch.setattr(module, "SAVE_DELAY", 3.0)  # well above five clicks on a loaded machine
+    session = Session(_empty(), tmp_path, None)
+    writes.clear()
+    track = session.click(None, 0, 1.0, 1.0)
+    for frame in range(1, 5):
+        session.click(track, frame, frame + 1.0, 1.0)
+    assert len(read_corrections(tmp_path / CORRECTIONS)) == 5, "each edit is in the log at once"
+    _wait_for(lambda: writes == [1])
+    time.sleep(0.3)
+    assert writes == [1] and len(_rows(read_tracks(tmp_path / TRACKS))) == 5
+    session.close()
+    assert writes == [1], "nothing new to write at close"
+
+
+def _wait_for(condition, timeout=10.0):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+
+
+def test_a_half_written_last_line_is_dropped_on_resume(tmp_path):
+    session = Session(_empty(), tmp_path, None)
+    track = session.click(None, 0, 1.0, 2.0)
+    session.close()
+    with open(tmp_path / CORRECTIONS, "a") as log:
+        log.write(f"add {track} 1 3.")  # what a kill in the middle of a write leaves
+    again = Session(_empty(), tmp_path, None)
+    assert [edit_text(edit) for edit in again.edits] == [f"add {track} 0 1.0 2.0"]
+    again.close()
+
+
+def test_kill_9_loses_no_edit(tmp_path, dish):
+    folder, _ = dish
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "seedtrack", "annotate", str(folder / "clip.mp4"), str(folder / "wrong.csv"), "--out", str(out), "--no-browser"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        address = process.stdout.readline().strip()
+        server = _Address(int(address.split(":")[2].split("/")[0]), address.split("token=")[1])
+        for path, body in (("/api/split", {"track": 0, "frame": 4}), ("/api/click", {"selected": 1, "frame": 2, "x": 5.0, "y": 6.0}), ("/api/delete", {"track": 3}), ("/api/undo", {}), ("/api/delete", {"track": 4, "frame": 7})):
+            _post(server, path, body)
+        served = _mirror(json.loads(_request(server, "GET", f"/api/state?token={server.token}")[1]))
+    finally:
+        process.kill()  # SIGKILL: no handler runs, tracks.csv is not caught up
+        process.wait(timeout=20)
+    assert [line.split()[0] for line in (out / CORRECTIONS).read_text().splitlines() if not line.startswith("#")] == ["split", "move", "delete"]
+    session = Session(read_tracks(folder / "wrong.csv"), out, folder / "wrong.csv")
+    assert _mirror(_state_of(session)) == served, "the log replays to the tracks the server held"
+    assert _rows(read_tracks(out / TRACKS)) == _rows(session.tracks), "and tracks.csv catches up on resume"
+    session.close()
+
+
+class _Address:
+    def __init__(self, port, token):
+        self.port, self.token = port, token
+
+
+def test_an_edit_that_cannot_be_saved_is_not_made(tmp_path, monkeypatch):
+    import errno
+
+    import seedtrack.annotate.session as module
+
+    session = Session(_empty(), tmp_path, None)
+    track = session.click(None, 0, 1.0, 2.0)
+    log = (tmp_path / CORRECTIONS).read_bytes()
+
+    def full(descriptor):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(module.os, "fsync", full)
+    with pytest.raises(EditRefused, match="No space left on device"):
+        session.click(track, 1, 3.0, 4.0)
+    monkeypatch.undo()
+    assert (tmp_path / CORRECTIONS).read_bytes() == log and _points(session.tracks) == {(track, 0): 1.0}
+    assert session.undo() and session.points == {}
+    session.close()
+
+
+def test_edits_while_tracks_csv_is_being_written_do_not_lock_up(tmp_path, monkeypatch):
+    import seedtrack.annotate.session as module
+
+    # Every edit starts a write at once, so writes and edits overlap all the time.
+    monkeypatch.setattr(module, "SAVE_DELAY", 0.0)
+    session = Session(_empty(), tmp_path, None)
+    track = session.click(None, 0, 1.0, 1.0)
+
+    def edit():
+        for frame in range(1, 150):
+            session.click(track, frame, frame + 1.0, 1.0)
+
+    worker = threading.Thread(target=edit, daemon=True)
+    worker.start()
+    worker.join(timeout=30)
+    assert not worker.is_alive(), "an edit and a write wait for each other"
+    session.close()
+    assert len(_rows(read_tracks(tmp_path / TRACKS))) == 150

@@ -612,6 +612,7 @@ def test_annotate_edits_at_the_frames_edge_are_read_back_by_correct_and_render(a
     assert _post(annotating, "/api/click", {"frame": 7, "x": 319.5, "y": -0.5})[0] == 200
     assert _post(annotating, "/api/click", {"frame": 0, "x": -0.5, "y": 239.5})[0] == 200
     folder = annotating.session.folder
+    annotating.session.close()  # tracks.csv is written a moment after the last edit, or now
     assert run(capsys, "correct", clip / "truth.csv", folder / "corrections.txt", "--out", tmp_path / "c.csv")[0] == 0
     assert (tmp_path / "c.csv").read_bytes() == (folder / "tracks.csv").read_bytes()
     assert run(capsys, "render", clip / "clip.mp4", folder / "tracks.csv", "--out", tmp_path / "r.png")[0] == 0
@@ -657,6 +658,7 @@ def test_the_replay_line_of_corrections_txt_works_in_the_folder_it_names(clip, t
     session = Session(read_tracks("run 1/tracks.csv"), Path("truth ü"), Path("run 1/tracks.csv"))
     session.delete(2, 5)
     session.click(1, 6, 100.0, 100.0)
+    session.close()
     saved = (folder / "tracks.csv").read_bytes()
     header = (folder / "corrections.txt").read_text().splitlines()[:2]
     assert header[0].endswith(f"in {folder}, apply with")
@@ -958,6 +960,7 @@ def test_whatever_the_page_sends_the_session_files_are_read_back(clip, tmp_path_
             except (EditRefused, ValueError, TypeError, KeyError):
                 pass  # the server answers 400 or 409 to these
     finally:
+        server.session.close()
         server.server_close()
         server.frames.close()
     # What the session wrote, `correct` and `render` read back.

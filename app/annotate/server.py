@@ -17,6 +17,7 @@ import json
 import secrets
 import socket
 import sys
+import threading
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
@@ -24,19 +25,22 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
+from seedtrack.data.corrections import tracks_of
 from seedtrack.data.errors import DataError
 from seedtrack.data.numbers import MAX_ID
 from seedtrack.tracking.tracks import Tracks
 
 from .doubt import doubtful_places
 from .frames import FrameCache
-from .session import EditRefused, ReassignUnconfirmed, Session
+from .session import EditRefused, ReassignUnconfirmed, Session, edit_text
 
 # The page's files: the only paths the server answers besides the API.
 _PAGE = {"/": ("index.html", "text/html; charset=utf-8"), "/app.js": ("app.js", "text/javascript; charset=utf-8"), "/app.css": ("app.css", "text/css; charset=utf-8")}
 _MAX_BODY = 4096
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]")
 _WILDCARDS = ("0.0.0.0", "::", "")
+# The page lists this many doubtful places, most doubtful first; the timeline shows where all are.
+_LISTED_PLACES = 1000
 
 
 class AnnotateServer(ThreadingHTTPServer):
@@ -90,6 +94,9 @@ class AnnotateServer(ThreadingHTTPServer):
         shown = "127.0.0.1" if host in _WILDCARDS or host in _LOOPBACK_NAMES else names[-1]
         self.url = f"http://{shown}:{self.port}/?token={self.token}"
         self._detected_frames = _by_frame(detections, frames.frame_count)
+        # The doubtful places of one version, computed once, by one request at a time.
+        self._doubt: tuple[int, dict] | None = None
+        self._doubt_lock = threading.Lock()
         # The page names its script and style sheet with the token, as every request must carry it.
         self._page = {path: (resources.files(__package__).joinpath("static", name).read_bytes().replace(b"__TOKEN__", self.token.encode()), kind) for path, (name, kind) in _PAGE.items()}
 
@@ -133,7 +140,8 @@ class AnnotateServer(ThreadingHTTPServer):
     def clip_info(self) -> dict:
         """What the page needs once: the clip's size, length and the detections."""
         session = self.session
-        tracks_end = session.tracks.first_frame + session.tracks.n_frames
+        with session.lock:
+            tracks_end = max(session.by_frame, default=-1) + 1
         count = self.frames.frame_count if self.frames.frame_count is not None else tracks_end
         info = {
             "name": str(self.frames.path),
@@ -149,22 +157,62 @@ class AnnotateServer(ThreadingHTTPServer):
         return info
 
     def state(self) -> dict:
-        """The session as the page draws it: the tracks, the edits and the doubtful places."""
+        """The whole session as the page draws it: every track's points, the edits and the version.
+
+        ``since`` is None (the page replaces what it has) and ``removed`` empty; see :meth:`delta`.
+        """
+        version, tracks, edits, can_redo = self.session.snapshot()
+        return _state(version, None, tracks.to_rows(), [], edits, can_redo)
+
+    def delta(self, since: int | None) -> dict:
+        """What changed after version ``since``: the points of the tracks changed and the ids of those gone.
+
+        The page applies it to what it holds at ``since``; when that version is unknown (None, or
+        not one this session made) the answer is the whole :meth:`state`.
+        """
         session = self.session
-        rows = session.tracks.to_rows()
-        count = self.frames.frame_count
-        return {
-            "tracks": {
-                "track_id": rows["track_id"].tolist(),
-                "frame": rows["frame"].tolist(),
-                "x": _rounded(rows["x"]),
-                "y": _rounded(rows["y"]),
-                "interpolated": rows["interpolated"].tolist(),
-            },
-            "edits": [" ".join(str(value) for value in (edit.verb, *edit.arguments)) for edit in session.edits],
-            "can_redo": session.can_redo,
-            "doubtful": doubtful_places(session.tracks, self._detected_frames, count, other=self.other),
-        }
+        with session.lock:
+            changed = session.changed_since(since) if since is not None else None
+            if changed is not None:
+                # An edit replaces a track's dict of points, never changes it: safe to read unlocked.
+                kept = {track: session.points[track] for track in sorted(changed) if track in session.points}
+                version, edits, can_redo = session.version, list(session.edits), session.can_redo
+        if changed is None:
+            return self.state()
+        return _state(version, since, tracks_of(kept).to_rows(), sorted(changed - kept.keys()), edits, can_redo)
+
+    def doubtful(self) -> dict:
+        """The doubtful places of the tracks as they are now: the first ones and how many a frame.
+
+        Computed once a version, outside the session's lock (it takes about a second at 10,000
+        tracks), so the page asks for it apart from the tracks and edits never wait for it.
+        """
+        with self._doubt_lock:
+            version, tracks, _, _ = self.session.snapshot()
+            if self._doubt is None or self._doubt[0] != version:
+                count = self.frames.frame_count
+                places = doubtful_places(tracks, self._detected_frames, count, other=self.other)
+                length = max(count or 0, max((place["frame"] for place in places), default=-1) + 1)
+                per_frame = np.bincount(np.array([place["frame"] for place in places], np.int64), minlength=length)
+                self._doubt = (version, {"version": version, "places": places[:_LISTED_PLACES], "count": len(places), "per_frame": per_frame.tolist()})
+            return self._doubt[1]
+
+
+def _state(version: int, since: int | None, rows: dict, removed: list[int], edits: list, can_redo: bool) -> dict:
+    return {
+        "version": version,
+        "since": since,
+        "tracks": {
+            "track_id": rows["track_id"].tolist(),
+            "frame": rows["frame"].tolist(),
+            "x": _rounded(rows["x"]),
+            "y": _rounded(rows["y"]),
+            "interpolated": rows["interpolated"].tolist(),
+        },
+        "removed": removed,
+        "edits": [edit_text(edit) for edit in edits],
+        "can_redo": can_redo,
+    }
 
 
 def _rounded(values: np.ndarray) -> list[float]:
@@ -213,8 +261,9 @@ class _Handler(BaseHTTPRequestHandler):
         if route == ("GET", "/api/clip"):
             return self._json(self.server.clip_info())
         if route == ("GET", "/api/state"):
-            with self.server.session.lock:
-                return self._json(self.server.state())
+            return self._json(self.server.state())
+        if route == ("GET", "/api/doubtful"):
+            return self._json(self.server.doubtful())
         if route == ("GET", "/api/frame"):
             return self._frame(query)
         if method == "POST" and url.path in _ACTIONS:
@@ -250,9 +299,12 @@ class _Handler(BaseHTTPRequestHandler):
             return self._error(HTTPStatus.CONFLICT, str(error))
         except (ValueError, TypeError, KeyError) as error:
             return self._error(HTTPStatus.BAD_REQUEST, f"bad request: {error}")
-        with self.server.session.lock:
-            state = self.server.state()
-        self._json({**state, **extra})
+        # The page names the version it holds, and gets only what changed since.
+        try:
+            seen = int(self.headers.get("X-Version") or "")
+        except ValueError:
+            seen = None
+        self._json({**self.server.delta(seen), **extra})
 
     def _json(self, value) -> None:
         self._send(HTTPStatus.OK, json.dumps(value, separators=(",", ":")).encode(), "application/json")

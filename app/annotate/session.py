@@ -2,8 +2,11 @@
 
 The edits are the session's state: the corrected tracks are always ``apply_corrections(start,
 edits)``, so ``seedtrack correct START DIR/corrections.txt`` rebuilds ``DIR/tracks.csv`` exactly.
-Every edit rewrites both files atomically (temporary file, then rename), so a server stopped at
-any moment leaves whole files.
+An edit changes only the tracks it names, and is appended to ``corrections.txt`` and flushed to
+disk (fsync) before it is answered; an undo cuts the file's last line off. ``tracks.csv``, whose
+rewrite grows with all the points, is written a moment after the last edit and when the session
+closes. A server killed at any moment (even ``kill -9``) loses nothing: the next session on the
+folder replays ``corrections.txt`` to the same tracks and writes ``tracks.csv`` again.
 """
 
 from __future__ import annotations
@@ -13,10 +16,8 @@ import shlex
 import threading
 from pathlib import Path
 
-import numpy as np
-
 from seedtrack.data.atomic import atomic_path
-from seedtrack.data.corrections import Edit, apply_corrections, read_corrections
+from seedtrack.data.corrections import Edit, apply_edit, points_of, read_corrections, tracks_of
 from seedtrack.data.errors import DataError
 from seedtrack.data.trackfile import FORMATS, write_tracks
 from seedtrack.tracking.tracks import Tracks
@@ -33,6 +34,8 @@ assert set(EXPORTS) == set(FORMATS) - {"geff"}
 SESSION_FILES = (CORRECTIONS, TRACKS, EMPTY_START, *EXPORTS.values())
 # A click within this distance of a track's point (pixels) means that point.
 SAME_POINT = 0.5
+# tracks.csv is written this long (seconds) after the last change: a burst of clicks costs one write.
+SAVE_DELAY = 2.0
 
 
 class EditRefused(ValueError):
@@ -45,7 +48,7 @@ class ReassignUnconfirmed(EditRefused):
 
 
 class Session:
-    """The tracks being corrected and the list of edits, saved to ``folder`` after each change.
+    """The tracks being corrected and the list of edits, saved to ``folder`` as they change.
 
     Parameters
     ----------
@@ -57,6 +60,11 @@ class Session:
         The tracks file ``start`` came from, named in ``corrections.txt``; None writes an empty
         ``start.csv`` into ``folder`` instead.
 
+    Attributes
+    ----------
+    version : int
+        Changes made so far (edits, undos, redos): what :meth:`changed_since` counts in.
+
     Example
     -------
     >>> import tempfile; from pathlib import Path
@@ -65,6 +73,7 @@ class Session:
     1
     >>> session.tracks.to_rows()["x"].tolist()
     [10.0]
+    >>> session.close()
     """
 
     def __init__(self, start: Tracks, folder: Path, start_path: Path | None) -> None:
@@ -77,22 +86,87 @@ class Session:
         self.start_path = start_path
         # Held while the session changes, and by whoever reads the tracks or stops the server.
         self.lock = threading.Lock()
+        # {track id: {frame: (x, y, interpolated)}}. An edit replaces the inner dicts of the tracks
+        # it names instead of changing them, so a shallow copy of the outer dict is a snapshot.
+        self.points = points_of(start)
+        self.by_frame: dict[int, set[int]] = {}
+        for track, frames in self.points.items():
+            for frame in frames:
+                self.by_frame.setdefault(frame, set()).add(track)
         self.edits: list[Edit] = []
+        # What each edit replaced: {track id: its points before, None for no track}.
+        self._before: list[dict[int, dict | None]] = []
         self._redo: list[Edit] = []
+        self.version = 0
+        # The tracks each change touched: the change to version v is self._touched[v - 1].
+        self._touched: list[frozenset[int]] = []
+        self._top = max(self.points, default=0)
+        self._tracks_cache: tuple[int, Tracks] | None = None
         saved = folder / CORRECTIONS
         if saved.exists():
             # Resume: the edits of an earlier session on this folder are the starting point.
-            self.edits = read_corrections(saved)
-            self.tracks = apply_corrections(start, self.edits, saved)
-        else:
-            self.tracks = start
-        self._index()
-        self._save()
+            _drop_torn_line(saved)
+            for edit in read_corrections(saved):
+                self._do(edit, f"{saved}:{edit.line}")
+        with atomic_path(saved) as temporary:
+            temporary.write_text(corrections_text(self.edits, self.start_path, self.folder), encoding="utf-8")
+        text = corrections_text([], self.start_path, self.folder).encode()
+        # Where each edit's line starts in the file: an undo cuts the file there.
+        self._line_starts = [len(text)]
+        for edit in self.edits:
+            self._line_starts.append(self._line_starts[-1] + len(_line(edit).encode()))
+        self._log = os.open(saved, os.O_WRONLY | os.O_APPEND)
+        # Lock order: _write_lock before lock; _timer_lock is taken alone (an edit takes it
+        # holding lock, so it must never wait for _write_lock).
+        self._write_lock = threading.Lock()
+        self._timer_lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._saved_version = -1
+        self._write_tracks()
 
     @property
     def can_redo(self) -> bool:
         """Whether an edit taken back can be made again."""
         return bool(self._redo)
+
+    @property
+    def tracks(self) -> Tracks:
+        """The corrected tracks as they are now (built once per version; hold ``lock`` if others edit)."""
+        return self._tracks_at(self.version, dict(self.points))
+
+    def snapshot(self) -> tuple[int, Tracks, list[Edit], bool]:
+        """The version, the tracks, the edits and :attr:`can_redo`, all of one moment.
+
+        The lock is held only to copy the outer dict of points, not while the tracks are built.
+        """
+        with self.lock:
+            version, points, edits, can_redo = self.version, dict(self.points), list(self.edits), self.can_redo
+        return version, self._tracks_at(version, points), edits, can_redo
+
+    def _tracks_at(self, version: int, points: dict) -> Tracks:
+        cached = self._tracks_cache
+        if cached is None or cached[0] != version:
+            cached = (version, tracks_of(points))
+            if self._tracks_cache is None or self._tracks_cache[0] < version:
+                self._tracks_cache = cached
+        return cached[1]
+
+    def changed_since(self, version: int) -> set[int] | None:
+        """Ids of the tracks changed after ``version`` (their points, or that they are gone); None if unknown.
+
+        Example
+        -------
+        >>> import tempfile; from pathlib import Path
+        >>> session = Session(Tracks.from_rows([], [], [], []), Path(tempfile.mkdtemp()), None)
+        >>> session.click(None, 0, 1.0, 2.0), session.click(None, 0, 5.0, 6.0)
+        (1, 2)
+        >>> session.changed_since(1), session.changed_since(2), session.changed_since(3)
+        ({2}, set(), None)
+        >>> session.close()
+        """
+        if not 0 <= version <= self.version:
+            return None
+        return set().union(*self._touched[version:])
 
     # --- what a click means -------------------------------------------------------------------
 
@@ -139,16 +213,15 @@ class Session:
                 return new
             if holder == selected:
                 return selected
+            own = self.points.get(selected, {})
             if holder is not None:
-                later = self._frames.get(selected, np.empty(0, np.int64))
-                verb = "join" if not (later >= frame).any() else "swap"
+                verb = "swap" if any(f >= frame for f in own) else "join"
                 if not reassign:
                     what = f"join track {holder} to track {selected}" if verb == "join" else f"swap tracks {selected} and {holder}"
                     raise ReassignUnconfirmed(f"this is track {holder}'s point: the click would {what} from frame {frame} on")
                 self._apply(Edit(verb, (selected, holder, frame), 0))
             else:
-                verb = "move" if frame in self._frame_sets.get(selected, ()) else "add"
-                self._apply(Edit(verb, (selected, frame, x, y), 0))
+                self._apply(Edit("move" if frame in own else "add", (selected, frame, x, y), 0))
             return selected
 
     def split(self, track: int, frame: int) -> int:
@@ -169,9 +242,10 @@ class Session:
             if not self.edits:
                 return False
             self._redo.append(self.edits.pop())
-            self.tracks = apply_corrections(self.start, self.edits, self.folder / CORRECTIONS)
-            self._index()
-            self._save()
+            before = self._before.pop()
+            self._restore(before)
+            self._log_cut()
+            self._changed(before)
             return True
 
     def redo(self) -> bool:
@@ -186,57 +260,154 @@ class Session:
     def export(self) -> list[Path]:
         """Write the corrected tracks in every track format; returns the files written."""
         with self.lock:
+            tracks = self.tracks
             written = []
             for name, file in EXPORTS.items():
-                write_tracks(self.folder / file, self.tracks, format=name)
+                write_tracks(self.folder / file, tracks, format=name)
                 written.append(self.folder / file)
             return written
+
+    def close(self) -> None:
+        """Write ``tracks.csv`` now if it lags behind the edits, and close the corrections log."""
+        with self._timer_lock:
+            if self._timer is not None:
+                self._timer.cancel()
+        self._write_tracks()
+        with self.lock:
+            if self._log >= 0:
+                os.close(self._log)
+                self._log = -1
 
     # --- internals ----------------------------------------------------------------------------
 
     def _apply(self, edit: Edit, keep_redo: bool = False) -> None:
+        if self._log < 0:
+            raise EditRefused("the server is stopping; the edit was not made")
         line = Edit(edit.verb, edit.arguments, len(self.edits) + 1)
         try:
-            tracks = apply_corrections(self.tracks, [line], "edit")
+            before = self._do(line, "edit")
         except DataError as error:
-            raise EditRefused(str(error).removeprefix("edit:1: ")) from None
-        self.edits.append(line)
+            raise EditRefused(error.problem) from None
+        # The edit is on disk before it is answered: a crash after this loses nothing.
+        try:
+            data = _line(line).encode()
+            while data:
+                data = data[os.write(self._log, data) :]
+            os.fsync(self._log)
+        except OSError as error:
+            self.edits.pop()
+            self._restore(self._before.pop())
+            os.ftruncate(self._log, self._line_starts[-1])
+            raise EditRefused(f"{self.folder / CORRECTIONS}: cannot save the edit ({error.strerror}); it was not made") from None
         if not keep_redo:
             self._redo.clear()
-        self.tracks = tracks
-        self._index()
-        self._save()
+        self._line_starts.append(self._line_starts[-1] + len(_line(line).encode()))
+        self._changed(before)
 
-    def _index(self) -> None:
-        rows = self.tracks.to_rows()
-        self._rows = rows
-        order = np.argsort(rows["track_id"], kind="stable")
-        ids, starts = np.unique(rows["track_id"][order], return_index=True)
-        groups = np.split(rows["frame"][order], starts[1:]) if ids.size else []
-        self._frames = dict(zip(ids.tolist(), groups))
-        self._frame_sets = {track: set(frames.tolist()) for track, frames in self._frames.items()}
+    def _do(self, edit: Edit, where: str) -> dict[int, dict | None]:
+        """Apply ``edit`` to the points and the frame index; returns what it replaced."""
+        verb, args = edit.verb, edit.arguments
+        named = {args[0]}
+        if verb in ("join", "swap"):
+            named.add(args[1])
+        elif verb == "split" and len(args) == 3:
+            named.add(args[2])
+        before = {track: self.points.get(track) for track in named}
+        for track, points in before.items():
+            if points is not None:
+                self.points[track] = dict(points)
+        try:
+            apply_edit(self.points, edit, where)
+        except DataError:
+            self._restore(before, index=False)
+            raise
+        self._reindex(before)
+        self.edits.append(edit)
+        self._before.append(before)
+        self._top = max(self._top, *named)
+        return before
+
+    def _restore(self, before: dict[int, dict | None], index: bool = True) -> None:
+        now = {track: self.points.get(track) for track in before}
+        for track, points in before.items():
+            if points is None:
+                self.points.pop(track, None)
+            else:
+                self.points[track] = points
+        if index:
+            self._reindex(now)
+
+    def _reindex(self, before: dict[int, dict | None]) -> None:
+        for track, points in before.items():
+            for frame in points or ():
+                here = self.by_frame[frame]
+                here.discard(track)
+                if not here:
+                    del self.by_frame[frame]
+            for frame in self.points.get(track, ()):
+                self.by_frame.setdefault(frame, set()).add(track)
+
+    def _changed(self, before: dict) -> None:
+        self.version += 1
+        self._touched.append(frozenset(before))
+        with self._timer_lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(SAVE_DELAY, self._write_tracks)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _log_cut(self) -> None:
+        self._line_starts.pop()
+        os.ftruncate(self._log, self._line_starts[-1])
+        os.fsync(self._log)
+
+    def _write_tracks(self) -> None:
+        # Writes one at a time, each of the newest snapshot, so a slow older one never lands last.
+        with self._write_lock:
+            with self.lock:
+                if self._saved_version == self.version:
+                    return
+                version, snapshot = self.version, dict(self.points)
+            write_tracks(self.folder / TRACKS, tracks_of(snapshot))
+            self._saved_version = version
 
     def _holder(self, frame: int, x: float, y: float) -> int | None:
-        rows = self._rows
-        here = np.flatnonzero(rows["frame"] == frame)
-        if here.size == 0:
-            return None
-        distance = np.hypot(rows["x"][here] - x, rows["y"][here] - y)
-        nearest = int(np.argmin(distance))
-        return int(rows["track_id"][here[nearest]]) if distance[nearest] <= SAME_POINT else None
+        best, nearest = None, SAME_POINT
+        for track in self.by_frame.get(frame, ()):
+            px, py = self.points[track][frame][:2]
+            distance = ((px - x) ** 2 + (py - y) ** 2) ** 0.5
+            if distance <= nearest and (best is None or distance < nearest or track < best):
+                best, nearest = track, distance
+        return best
 
     def _new_id(self) -> int:
-        used = [int(self.start.track_ids.max()) if self.start.n_tracks else 0]
-        used += [max(self._frames) if self._frames else 0]
-        used += [edit.arguments[0] for edit in self.edits if edit.verb == "add"]
-        used += [edit.arguments[2] for edit in self.edits if edit.verb == "split"]
-        # Never reuse an id, even of a deleted track, so that an id in the file means one track.
-        return max(used) + 1
+        # Never reuse an id, even of a deleted track or of an edit taken back, so that an id in
+        # the file means one track.
+        return self._top + 1
 
-    def _save(self) -> None:
-        with atomic_path(self.folder / CORRECTIONS) as temporary:
-            temporary.write_text(corrections_text(self.edits, self.start_path, self.folder), encoding="utf-8")
-        write_tracks(self.folder / TRACKS, self.tracks)
+
+def _drop_torn_line(path: Path) -> None:
+    """Cut off a last line a crash left half written (it has no line end): the edit was never answered."""
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with open(path, "r+b") as handle:
+            handle.truncate(data.rfind(b"\n") + 1)
+
+
+def edit_text(edit: Edit) -> str:
+    """One edit as its line of a corrections file, without the line end.
+
+    Example
+    -------
+    >>> edit_text(Edit("move", (3, 5, 12.5, 7.0), 1))
+    'move 3 5 12.5 7.0'
+    """
+    return " ".join(_word(value) for value in (edit.verb, *edit.arguments))
+
+
+def _line(edit: Edit) -> str:
+    return edit_text(edit) + "\n"
 
 
 def corrections_text(edits: list[Edit], start_path: Path, folder: Path) -> str:
@@ -255,8 +426,7 @@ def corrections_text(edits: list[Edit], start_path: Path, folder: Path) -> str:
         f"# seedtrack annotate: edits to {os.path.abspath(start_path)}; in {os.path.abspath(folder)}, apply with",
         f"#   seedtrack correct {shlex.quote(start)} {CORRECTIONS} --out {TRACKS}",
     ]
-    lines += [" ".join(_word(value) for value in (edit.verb, *edit.arguments)) for edit in edits]
-    return "\n".join(lines) + "\n"
+    return "".join(line + "\n" for line in lines) + "".join(_line(edit) for edit in edits)
 
 
 def _word(value) -> str:

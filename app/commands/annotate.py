@@ -26,7 +26,7 @@ def add_parser(subparsers) -> None:
         description="Serve a page on this machine that shows INPUT with TRACKS (or no tracks, to track by hand) "
         "and turns clicks into edits: select a track, click the point it should have (a link, a swap from that "
         "frame on, a moved or added point), split, delete, undo, and jump to the places the tracker was least "
-        "sure of. Every edit is saved at once to DIR/corrections.txt (for `seedtrack correct`) and DIR/tracks.csv. "
+        "sure of. Every edit is saved at once to DIR/corrections.txt (for `seedtrack correct`); DIR/tracks.csv follows a moment later and at the end. "
         "The first line printed is the page's address, with its secret token; stop with Ctrl-C.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)
@@ -65,8 +65,8 @@ def run(args: argparse.Namespace) -> int:
         pass
     finally:
         server.server_close()
-        # An edit being saved finishes first: the files are whole when the command ends.
-        with session.lock:
-            frames.close()
+        # An edit being saved finishes first, and tracks.csv catches up with the edits.
+        session.close()
+        frames.close()
     print(f"stopped; {len(session.edits)} edits in {args.out / CORRECTIONS}", file=sys.stderr)
     return 0

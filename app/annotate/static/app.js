@@ -13,12 +13,16 @@ const MIN_RING = 7;
 const SNAP = 10;            // a click this near a point (CSS pixels) means that point
 const CACHED_FRAMES = 300;  // decoded pictures kept in the page
 const LABEL_CELL = [34, 14];
+const DOUBT_DELAY = 800;    // ms after the last edit before the doubtful places are asked for again
 
+// tracks: id -> its points sorted by frame ({frame, x, y, interpolated} arrays); byFrame: frame ->
+// (id -> index of its point there). An edit's answer replaces only the tracks it changed.
 const state = {
   clip: null, frame: 0, selected: null, playing: false, autoAdvance: false,
-  rows: null, byFrame: new Map(), byTrack: new Map(), detectionsByFrame: new Map(),
-  doubtful: [], visited: new Set(), edits: [], view: { scale: 1, tx: 0, ty: 0 },
-  images: new Map(), shownImage: null, drawnFrame: -1, stepStarted: null, lastStepMs: null, ready: false,
+  version: -1, tracks: new Map(), byFrame: new Map(), detectionsByFrame: new Map(),
+  doubtful: [], doubtCount: 0, doubtPerFrame: [], doubtVersion: -1, doubtLoading: null, doubtTimer: null, timelineMarks: null,
+  visited: new Set(), edits: [], view: { scale: 1, tx: 0, ty: 0 },
+  images: new Map(), shownImage: null, drawnFrame: -1, stepStarted: null, lastStepMs: null, lastEditMs: null, ready: false,
 };
 
 // --- talking to the server -------------------------------------------------------------------
@@ -31,20 +35,35 @@ async function getJSON(path) {
   return response.json();
 }
 
-async function post(path, body = {}) {
-  const response = await fetch(api(path), { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
+// One request at a time, so each answer is the change from the version the page then holds.
+let posting = Promise.resolve();
+
+function post(path, body = {}) {
+  const result = posting.then(() => send(path, body));
+  posting = result.catch(() => null);
+  return result;
+}
+
+async function send(path, body) {
+  const started = performance.now();
+  const response = await fetch(api(path), { method: "POST", headers: { "Content-Type": "application/json", "X-Version": String(state.version) }, body: JSON.stringify(body) });
   const reply = await response.json();
   // A click on another track's point takes it only when the user says so: the server says what
   // it would do, and the click is sent again if the user agrees (shift-click agrees beforehand).
   if (response.status === 409 && reply.reassign) {
-    if (window.confirm(`${reply.reassign}. Do it?`)) return post(path, { ...body, reassign: true });
+    // Sent at once, not queued: this request already holds the queue.
+    if (window.confirm(`${reply.reassign}. Do it?`)) return send(path, { ...body, reassign: true });
     say("nothing changed (shift-click takes another track's point without asking)");
     return null;
   }
   if (!response.ok) { say(reply.error, true); return null; }
-  takeState(reply);
+  if (reply.since !== null && reply.since !== state.version) takeState(await getJSON("/api/state"));
+  else takeState(reply);
   if ("selected" in reply && reply.selected !== null) state.selected = reply.selected;
-  if (state.selected !== null && !state.byTrack.has(state.selected)) state.selected = null;
+  if (state.selected !== null && !state.tracks.has(state.selected)) state.selected = null;
+  showLists();
+  draw();
+  state.lastEditMs = performance.now() - started;
   say(reply.exported ? `wrote ${reply.exported.join(", ")}` : "saved");
   return reply;
 }
@@ -57,19 +76,62 @@ function say(text, error = false) {
 
 // --- the tracks, indexed for drawing ---------------------------------------------------------
 
+// The whole state (since null) or the tracks changed since the version the page holds.
 function takeState(reply) {
+  if (reply.since === null) { state.tracks = new Map(); state.byFrame = new Map(); }
   const rows = reply.tracks;
-  state.rows = rows;
-  state.byFrame = new Map();
-  state.byTrack = new Map();
+  const changed = new Map();
   for (let i = 0; i < rows.frame.length; i++) {
-    push(state.byFrame, rows.frame[i], i);
-    push(state.byTrack, rows.track_id[i], i);
+    const id = rows.track_id[i];
+    let track = changed.get(id);
+    if (!track) { track = { frame: [], x: [], y: [], interpolated: [] }; changed.set(id, track); }
+    track.frame.push(rows.frame[i]); track.x.push(rows.x[i]); track.y.push(rows.y[i]); track.interpolated.push(rows.interpolated[i]);
   }
+  for (const id of reply.removed) setTrack(id, null);
+  for (const [id, track] of changed) setTrack(id, track);
+  state.version = reply.version;
   state.edits = reply.edits;
-  state.doubtful = reply.doubtful;
-  showLists();
-  draw();
+  scheduleDoubt();
+}
+
+function setTrack(id, track) {
+  const old = state.tracks.get(id);
+  if (old) for (const frame of old.frame) {
+    const here = state.byFrame.get(frame);
+    here.delete(id);
+    if (!here.size) state.byFrame.delete(frame);
+  }
+  if (!track) { state.tracks.delete(id); return; }
+  state.tracks.set(id, track);
+  track.frame.forEach((frame, i) => {
+    let here = state.byFrame.get(frame);
+    if (!here) { here = new Map(); state.byFrame.set(frame, here); }
+    here.set(id, i);
+  });
+}
+
+// --- doubtful places: asked for apart from the tracks, as they take the server a while -------
+
+function scheduleDoubt() {
+  clearTimeout(state.doubtTimer);
+  state.doubtTimer = setTimeout(loadDoubt, state.doubtVersion < 0 ? 0 : DOUBT_DELAY);
+}
+
+function loadDoubt() {
+  clearTimeout(state.doubtTimer);
+  if (state.doubtVersion === state.version) return Promise.resolve();
+  if (!state.doubtLoading) {
+    state.doubtLoading = getJSON("/api/doubtful").then((reply) => {
+      state.doubtful = reply.places;
+      state.doubtCount = reply.count;
+      state.doubtPerFrame = reply.per_frame;
+      state.doubtVersion = reply.version;
+      state.timelineMarks = null;
+      showLists();
+      drawTimeline();
+    }, (error) => say(error.message, true)).finally(() => { state.doubtLoading = null; });
+  }
+  return state.doubtLoading.then(() => { if (state.doubtVersion !== state.version) return loadDoubt(); });
 }
 
 function push(map, key, value) {
@@ -77,10 +139,18 @@ function push(map, key, value) {
   if (list) list.push(value); else map.set(key, [value]);
 }
 
-function pointOf(track, frame) {
-  const rows = state.rows;
-  for (const i of state.byTrack.get(track) || []) if (rows.frame[i] === frame) return [rows.x[i], rows.y[i], rows.interpolated[i]];
-  return null;
+function pointOf(id, frame) {
+  const i = state.byFrame.get(frame)?.get(id);
+  if (i === undefined) return null;
+  const track = state.tracks.get(id);
+  return [track.x[i], track.y[i], track.interpolated[i]];
+}
+
+// Index of the first point of a track at or after frame.
+function firstFrom(track, frame) {
+  let low = 0, high = track.frame.length;
+  while (low < high) { const middle = (low + high) >> 1; if (track.frame[middle] < frame) low = middle + 1; else high = middle; }
+  return low;
 }
 
 function colour(track, lightness = 60) { return `hsl(${(track * 137.508) % 360}, 90%, ${lightness}%)`; }
@@ -170,34 +240,38 @@ function draw() {
     context.imageSmoothingEnabled = v.scale < 2;
     context.drawImage(state.shownImage, v.tx - 0.5 * v.scale, v.ty - 0.5 * v.scale, state.clip.width * v.scale, state.clip.height * v.scale);
   }
-  if (state.rows) drawTracks();
+  if (state.version >= 0) drawTracks();
   drawTimeline();
 }
 
 let RING = MIN_RING;
 
+// Only what is in view is drawn: the points of this frame (and their trails) on the canvas.
 function drawTracks() {
-  const rows = state.rows, frame = state.frame;
+  const frame = state.frame;
   RING = Math.max(MIN_RING, Math.min(30, RING_PIXELS * state.view.scale));
+  const margin = RING + TRAIL * 4 * state.view.scale + 40, w = canvas.clientWidth, h = canvas.clientHeight;
+  const inView = (sx, sy) => sx > -margin && sy > -margin && sx < w + margin && sy < h + margin;
   for (const [x, y] of state.detectionsByFrame.get(frame) || []) {
     const [sx, sy] = toScreen(x, y);
+    if (!inView(sx, sy)) continue;
     context.strokeStyle = "rgba(0, 220, 255, 0.9)";
     context.lineWidth = 1;
     context.beginPath();
     context.moveTo(sx - 3, sy); context.lineTo(sx + 3, sy); context.moveTo(sx, sy - 3); context.lineTo(sx, sy + 3);
     context.stroke();
   }
-  const here = state.byFrame.get(frame) || [];
   const labels = [];
-  for (const i of here) {
-    const track = rows.track_id[i];
-    if (track === state.selected) continue;
-    drawTrail(track, frame - TRAIL, frame, colour(track), 1.5);
-    const [sx, sy] = toScreen(rows.x[i], rows.y[i]);
-    ring(sx, sy, RING, colour(track), 2, rows.interpolated[i]);
-    labels.push([track, sx, sy]);
+  for (const [id, i] of state.byFrame.get(frame) || []) {
+    if (id === state.selected) continue;
+    const track = state.tracks.get(id);
+    const [sx, sy] = toScreen(track.x[i], track.y[i]);
+    if (!inView(sx, sy)) continue;
+    drawTrail(id, frame - TRAIL, frame, colour(id), 1.5);
+    ring(sx, sy, RING, colour(id), 2, track.interpolated[i]);
+    labels.push([id, sx, sy]);
   }
-  if (state.selected !== null && state.byTrack.has(state.selected)) {
+  if (state.selected !== null && state.tracks.has(state.selected)) {
     const track = state.selected;
     drawTrail(track, -Infinity, Infinity, "rgba(255,255,255,0.85)", 1.5);
     const point = pointOf(track, frame);
@@ -210,16 +284,16 @@ function drawTracks() {
   drawLabels(labels);
 }
 
-function drawTrail(track, from, to, style, width) {
-  const rows = state.rows;
+function drawTrail(id, from, to, style, width) {
+  const track = state.tracks.get(id);
   context.strokeStyle = style;
   context.lineWidth = width;
   context.beginPath();
   let started = false, previous = null;
-  for (const i of state.byTrack.get(track)) {
-    const f = rows.frame[i];
-    if (f < from || f > to) continue;
-    const [sx, sy] = toScreen(rows.x[i], rows.y[i]);
+  for (let i = from === -Infinity ? 0 : firstFrom(track, from); i < track.frame.length; i++) {
+    const f = track.frame[i];
+    if (f > to) break;
+    const [sx, sy] = toScreen(track.x[i], track.y[i]);
     if (!started || f !== previous + 1) context.moveTo(sx, sy); else context.lineTo(sx, sy);
     started = true;
     previous = f;
@@ -271,15 +345,26 @@ function drawTimeline() {
   timelineContext.fillStyle = "#111";
   timelineContext.fillRect(0, 0, w, h);
   const at = (frame) => ((frame + 0.5) / n) * w;
-  if (state.selected !== null && state.byTrack.has(state.selected)) {
-    const frames = state.byTrack.get(state.selected).map((i) => state.rows.frame[i]);
+  if (state.selected !== null && state.tracks.has(state.selected)) {
+    const frames = state.tracks.get(state.selected).frame;
     timelineContext.fillStyle = "rgba(255,255,255,0.35)";
-    timelineContext.fillRect(at(Math.min(...frames) - 0.5), 4, at(Math.max(...frames) + 0.5) - at(Math.min(...frames) - 0.5), 8);
+    timelineContext.fillRect(at(frames[0] - 0.5), 4, at(frames[frames.length - 1] + 0.5) - at(frames[0] - 0.5), 8);
   }
-  timelineContext.fillStyle = "#e0604a";
-  for (const place of state.doubtful) timelineContext.fillRect(at(place.frame) - 1, 16, 2, 10);
+  if (!state.timelineMarks) state.timelineMarks = doubtMarks(w, h, ratio, at);
+  timelineContext.drawImage(state.timelineMarks, 0, 0, w, h);
   timelineContext.fillStyle = "#f0c040";
   timelineContext.fillRect(at(state.frame) - 1.5, 0, 3, h);
+}
+
+// The frames with doubtful places, drawn once a version rather than at every step.
+function doubtMarks(w, h, ratio, at) {
+  const marks = document.createElement("canvas");
+  marks.width = Math.max(1, Math.round(w * ratio)); marks.height = Math.max(1, Math.round(h * ratio));
+  const c = marks.getContext("2d");
+  c.setTransform(ratio, 0, 0, ratio, 0, 0);
+  c.fillStyle = "#e0604a";
+  state.doubtPerFrame.forEach((count, frame) => { if (count) c.fillRect(at(frame) - 1, 16, 2, 10); });
+  return marks;
 }
 
 // --- side lists ------------------------------------------------------------------------------
@@ -307,9 +392,9 @@ function showLists() {
 
 function showSelected() {
   const box = document.getElementById("selected");
-  if (state.selected === null || !state.byTrack.has(state.selected)) { box.textContent = "none: click a track's point"; return; }
-  const frames = state.byTrack.get(state.selected).map((i) => state.rows.frame[i]);
-  box.textContent = `track ${state.selected}: frames ${Math.min(...frames)}-${Math.max(...frames)} (${frames.length} points)`;
+  if (state.selected === null || !state.tracks.has(state.selected)) { box.textContent = "none: click a track's point"; return; }
+  const frames = state.tracks.get(state.selected).frame;
+  box.textContent = `track ${state.selected}: frames ${frames[0]}-${frames[frames.length - 1]} (${frames.length} points)`;
 }
 
 function visit(place) {
@@ -322,7 +407,8 @@ function visit(place) {
   say(`${place.kind}: ${place.text}`);
 }
 
-function nextDoubtful(backwards) {
+async function nextDoubtful(backwards) {
+  if (state.doubtVersion !== state.version) { say("finding the doubtful places..."); await loadDoubt(); }
   const list = backwards ? [...state.doubtful].reverse() : state.doubtful;
   const place = list.find((p) => !state.visited.has(placeKey(p)));
   if (place) visit(place); else say("no doubtful place left unvisited");
@@ -333,20 +419,21 @@ function nextDoubtful(backwards) {
 function target(sx, sy) {
   // The nearest point on screen within SNAP: a track's point or a detection.
   let best = null, bestDistance = SNAP;
-  const rows = state.rows;
   const consider = (x, y) => {
     const [px, py] = toScreen(x, y);
     const distance = Math.hypot(px - sx, py - sy);
     if (distance <= bestDistance) { best = [x, y]; bestDistance = distance; }
   };
-  for (const i of state.byFrame.get(state.frame) || []) consider(rows.x[i], rows.y[i]);
+  for (const [id, i] of state.byFrame.get(state.frame) || []) consider(state.tracks.get(id).x[i], state.tracks.get(id).y[i]);
   for (const [x, y] of state.detectionsByFrame.get(state.frame) || []) consider(x, y);
   return best;
 }
 
 function holderOf(x, y) {
-  const rows = state.rows;
-  for (const i of state.byFrame.get(state.frame) || []) if (Math.hypot(rows.x[i] - x, rows.y[i] - y) <= 0.5) return rows.track_id[i];
+  for (const [id, i] of state.byFrame.get(state.frame) || []) {
+    const track = state.tracks.get(id);
+    if (Math.hypot(track.x[i] - x, track.y[i] - y) <= 0.5) return id;
+  }
   return null;
 }
 
@@ -426,9 +513,9 @@ document.addEventListener("keydown", (event) => {
   else if (key === "g") { const box = document.getElementById("frame"); box.focus(); box.select(); }
   else if (key === "e") post("/api/export");
   else if (key === "m") { state.autoAdvance = !state.autoAdvance; document.getElementById("advance").checked = state.autoAdvance; }
-  else if ((key === "[" || key === "]") && selected !== null && state.byTrack.has(selected)) {
-    const frames = state.byTrack.get(selected).map((i) => state.rows.frame[i]);
-    goTo(key === "[" ? Math.min(...frames) : Math.max(...frames));
+  else if ((key === "[" || key === "]") && selected !== null && state.tracks.has(selected)) {
+    const frames = state.tracks.get(selected).frame;
+    goTo(key === "[" ? frames[0] : frames[frames.length - 1]);
   } else handled = false;
   if (handled) event.preventDefault();
 });
@@ -437,7 +524,7 @@ document.getElementById("play").onclick = togglePlay;
 document.getElementById("export").onclick = () => post("/api/export");
 document.getElementById("advance").onchange = (event) => { state.autoAdvance = event.target.checked; };
 document.getElementById("frame").onchange = (event) => goTo(parseInt(event.target.value, 10) || 0);
-window.addEventListener("resize", () => { resize(); draw(); });
+window.addEventListener("resize", () => { resize(); state.timelineMarks = null; draw(); });
 
 // --- start -----------------------------------------------------------------------------------
 
@@ -457,8 +544,11 @@ async function start() {
   }
   resize();
   fit();
+  say("loading the tracks...");
   const [reply] = await Promise.all([getJSON("/api/state"), loadFrame(0)]);
   takeState(reply);
+  showLists();
+  say(`${state.tracks.size} tracks`);
   goTo(0);
   canvas.focus();
 }
