@@ -48,7 +48,7 @@ def progress_bar(total: int | None, description: str, unit: str = "frame"):
         mode = "bar" if sys.stderr.isatty() else "lines"
     if mode == "lines":
         return ProgressLines(total, description, unit)
-    return tqdm(total=total, desc=description, unit=unit, disable=mode == "none" or None, leave=False, dynamic_ncols=True)
+    return tqdm(total=total, desc=description, unit=unit, disable=mode == "none", leave=False, dynamic_ncols=True)
 
 
 class ProgressLines:
