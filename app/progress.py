@@ -54,7 +54,8 @@ def progress_bar(total: int | None, description: str, unit: str = "frame"):
 class ProgressLines:
     """Progress as plain lines on standard error, for logs: nothing for a step shorter than
     ``QUIET_SECONDS``, else a line when it is seen to be long, at most one every
-    ``LINE_SECONDS`` after, and one at its end, each with the seconds elapsed.
+    ``LINE_SECONDS`` after, and one at its end, each with the seconds elapsed (none if an error
+    or Ctrl-C stops it: the command's one line says so).
 
     Example
     -------
@@ -79,18 +80,19 @@ class ProgressLines:
         self.status = text
         self._maybe_say()
 
-    def close(self, stopped: bool = False) -> None:
-        """Say that the step ended (or was ``stopped`` by an error), if it was said to start."""
+    def close(self) -> None:
+        """Say that the step ended, if it was said to start."""
         if self.said_at is not None:
-            ended = "stopped" if stopped else "done"
-            self._say(f"{ended}, {self._count()} in {_clock() - self.start:.1f} s")
+            self._say(f"done, {self._count()} in {_clock() - self.start:.1f} s")
             self.said_at = None
 
     def __enter__(self) -> ProgressLines:
         return self
 
     def __exit__(self, kind, value, traceback) -> None:
-        self.close(stopped=kind is not None)
+        # A step stopped by an error or Ctrl-C ends in the command's one line saying why.
+        if kind is None:
+            self.close()
 
     def _maybe_say(self) -> None:
         now = _clock()
