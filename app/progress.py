@@ -25,6 +25,9 @@ MODES = ("auto", "bar", "lines", "none")
 # empty; a longer one says it started, then at most a line per interval, then that it ended.
 QUIET_SECONDS = 3.0
 LINE_SECONDS = 10.0
+# How often a step's lines are looked at between its updates: a long call between two (the
+# first frame's decisions, tracking's gap closing after its passes) still gets its lines.
+WATCH_SECONDS = 1.0
 
 _clock = time.monotonic
 
@@ -69,6 +72,10 @@ class ProgressLines:
         self.status = ""
         self.start = _clock()
         self.said_at: float | None = None
+        self._lock = threading.Lock()
+        self._ended = threading.Event()
+        self._watch = threading.Thread(target=self._watching, name=f"progress of {description}", daemon=True)
+        self._watch.start()
 
     def update(self, n: int = 1) -> None:
         """Count ``n`` more steps done."""
@@ -82,9 +89,11 @@ class ProgressLines:
 
     def close(self) -> None:
         """Say that the step ended, if it was said to start."""
-        if self.said_at is not None:
-            self._say(f"done, {self._count()} in {_clock() - self.start:.1f} s")
-            self.said_at = None
+        self._stop()
+        with self._lock:
+            if self.said_at is not None:
+                self._say(f"done, {self._count()} in {_clock() - self.start:.1f} s")
+                self.said_at = None
 
     def __enter__(self) -> ProgressLines:
         return self
@@ -93,14 +102,25 @@ class ProgressLines:
         # A step stopped by an error or Ctrl-C ends in the command's one line saying why.
         if kind is None:
             self.close()
+        else:
+            self._stop()
+
+    def _stop(self) -> None:
+        self._ended.set()
+        self._watch.join()
+
+    def _watching(self) -> None:
+        while not self._ended.wait(WATCH_SECONDS):
+            self._maybe_say()
 
     def _maybe_say(self) -> None:
-        now = _clock()
-        if self.said_at is None:
-            if now - self.start >= QUIET_SECONDS:
-                self._say(f"started {now - self.start:.0f} s ago, {self._count()}", now)
-        elif now - self.said_at >= LINE_SECONDS:
-            self._say(f"{self._count()} after {now - self.start:.0f} s", now)
+        with self._lock:
+            now = _clock()
+            if self.said_at is None:
+                if now - self.start >= QUIET_SECONDS:
+                    self._say(f"started {now - self.start:.0f} s ago, {self._count()}", now)
+            elif now - self.said_at >= LINE_SECONDS:
+                self._say(f"{self._count()} after {now - self.start:.0f} s", now)
 
     def _count(self) -> str:
         if not self.total:

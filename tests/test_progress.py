@@ -4,6 +4,7 @@ in a log, a short one says nothing."""
 import itertools
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -36,6 +37,14 @@ def test_a_bar_in_a_worker_stopped_abruptly_leaks_no_semaphore(tmp_path):
 
 
 @pytest.fixture
+def clock(monkeypatch):
+    """A clock that moves a second each time it is read, looked at only by the steps' updates."""
+    seconds = itertools.count()
+    monkeypatch.setattr(progress, "_clock", lambda: float(next(seconds)))
+    monkeypatch.setattr(progress, "WATCH_SECONDS", 3600.0)
+
+
+@pytest.fixture
 def points(tmp_path):
     frames, _ = generate_psmg(PSMGSpec(trajectories=10, frames=40, random_seed=2))
     path = tmp_path / "points.csv"
@@ -45,10 +54,8 @@ def points(tmp_path):
     return path
 
 
-def test_a_long_step_in_a_log_says_it_started_how_it_goes_and_that_it_ended(points, tmp_path, capsys, monkeypatch):
-    # A clock that moves a second each time it is read: every tracking step takes a second.
-    seconds = itertools.count()
-    monkeypatch.setattr(progress, "_clock", lambda: float(next(seconds)))
+def test_a_long_step_in_a_log_says_it_started_how_it_goes_and_that_it_ended(points, tmp_path, capsys, monkeypatch, clock):
+    # Every tracking step takes a second.
     monkeypatch.delenv("SEEDTRACK_PROGRESS", raising=False)
     assert main(["track", points, "--out", tmp_path / "tracks.csv"]) == 0
     lines = capsys.readouterr().err.splitlines()
@@ -59,12 +66,13 @@ def test_a_long_step_in_a_log_says_it_started_how_it_goes_and_that_it_ended(poin
     assert lines[1:-1] == [f"tracking: {n}/{steps} steps ({100 * n / steps:.0f}%) after {n} s" for n in range(13, steps + 1, 10)]
 
 
-def test_a_short_step_says_nothing_and_none_silences_a_long_one(points, tmp_path, capsys, monkeypatch):
+def test_a_short_step_says_nothing(points, tmp_path, capsys, monkeypatch):
     monkeypatch.delenv("SEEDTRACK_PROGRESS", raising=False)
     assert main(["track", points, "--out", tmp_path / "short.csv"]) == 0
     assert capsys.readouterr().err == ""
-    seconds = itertools.count()
-    monkeypatch.setattr(progress, "_clock", lambda: float(next(seconds)))
+
+
+def test_none_silences_a_long_step(points, tmp_path, capsys, monkeypatch, clock):
     monkeypatch.setenv("SEEDTRACK_PROGRESS", "none")
     assert main(["track", points, "--out", tmp_path / "silenced.csv"]) == 0
     assert capsys.readouterr().err == ""
@@ -73,9 +81,23 @@ def test_a_short_step_says_nothing_and_none_silences_a_long_one(points, tmp_path
 def test_a_step_stopped_by_an_error_leaves_the_last_line_to_the_command(capsys, monkeypatch):
     seconds = itertools.count(step=4)
     monkeypatch.setattr(progress, "_clock", lambda: float(next(seconds)))
+    monkeypatch.setattr(progress, "WATCH_SECONDS", 3600.0)
     with pytest.raises(KeyError), progress.progress_bar(None, "rendering") as bar:
         bar.set_postfix_str("first frame: measuring spots")
         raise KeyError
     assert capsys.readouterr().err.splitlines() == [
         "rendering: started 4 s ago, 0 frames (first frame: measuring spots)",
     ]
+
+
+def test_a_long_call_between_updates_still_gets_its_lines(capsys, monkeypatch):
+    monkeypatch.setattr(progress, "QUIET_SECONDS", 0.1)
+    monkeypatch.setattr(progress, "LINE_SECONDS", 0.2)
+    monkeypatch.setattr(progress, "WATCH_SECONDS", 0.01)
+    with progress.ProgressLines(10, "tracking", "step") as lines:
+        lines.update(10)
+        time.sleep(1.0)  # as gap closing after the last pass
+    said = capsys.readouterr().err.splitlines()
+    assert said[0] == "tracking: started 0 s ago, 10/10 steps (100%)"
+    assert said[1].startswith("tracking: 10/10 steps (100%) after ") and said[-1].startswith("tracking: done, 10/10 steps (100%) in ")
+    assert 3 <= len(said) <= 7, said  # at most one line each 0.2 s between the first and the last
