@@ -8,6 +8,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -546,7 +547,8 @@ def test_tracks_csv_is_written_once_for_a_burst_of_edits(tmp_path, monkeypatch):
     import seedtrack.annotate.session as module
 
     writes = []
-    monkeypatch.setattr(module, "write_tracks", lambda path, tracks, **kw: writes.append(tracks.n_tracks) or write_tracks(path, tracks, **kw))
+    # Only this session's writes count: another test's session may still have a save pending.
+    monkeypatch.setattr(module, "write_tracks", lambda path, tracks, **kw: (Path(path).parent == tmp_path and writes.append(tracks.n_tracks)) or write_tracks(path, tracks, **kw))
     monkeypatch.setattr(module, "SAVE_DELAY", 3.0)  # well above five clicks on a loaded machine
     session = Session(_empty(), tmp_path, None)
     writes.clear()

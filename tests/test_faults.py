@@ -566,6 +566,7 @@ def annotating(clip, tmp_path):
     threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
     yield server
     server.shutdown()
+    server.session.close()
     server.server_close()
     server.frames.close()
 
