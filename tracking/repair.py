@@ -19,6 +19,7 @@ encounters and kinks, not with the square of the tracks.
 
 from __future__ import annotations
 
+import heapq
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -132,7 +133,18 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
                 continue
             now, best, spans = _pairings(xy, measured, i[weighed], j[weighed], k, statistics)
             exchanged: set[int] = set()
-            for p, q in enumerate(weighed):
+            # Only the pairs that gain by an exchange, and those after an exchange that hold one
+            # of its tracks, can change anything: the others are passed over, in order (the
+            # swarm's thousands of pairs a frame went one by one through Python).
+            first_i, first_j = i[weighed], j[weighed]
+            visit = list(np.flatnonzero(best < now - _MARGIN))
+            heapq.heapify(visit)
+            seen = -1
+            while visit:
+                p = heapq.heappop(visit)
+                if p <= seen:
+                    continue
+                seen, q = p, weighed[p]
                 pair = (int(i[q]), int(j[q]))
                 if exchanged.intersection(pair):
                     if budget <= 0 or not (kink[q] or np.hypot(*(xy[pair[0], k] - xy[pair[1], k])) <= _ENCOUNTER_SIGMAS * max(sigma[a[q]], sigma[b[q]])):
@@ -146,6 +158,9 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
                         array[pair, span[0] : span[1]] = array[pair[::-1], span[0] : span[1]]
                     exchanged.update(pair)
                     changed = True
+                    later = p + 1 + np.flatnonzero(np.isin(first_i[p + 1 :], pair) | np.isin(first_j[p + 1 :], pair))
+                    for r in later.tolist():
+                        heapq.heappush(visit, r)
         if not changed:
             break
     del measured
