@@ -122,7 +122,7 @@ def _seedtrack_limited(frames, limit, missed):
 ADAPTIVE: set = set()
 
 
-def _trackpy(mode: str):
+def trackpy_tracker(mode: str):
     def run(frames, limit, missed):
         memory = 3 if missed else 0
         try:
@@ -144,8 +144,8 @@ TRACKERS: dict[str, Callable] = {
     "seedtrack": _seedtrack(None),
     "seedtrack --max-speed": _seedtrack_limited,
     "switching default": _switching,
-    "trackpy": _trackpy("plain"),
-    "trackpy predict": _trackpy("predict"),
+    "trackpy": trackpy_tracker("plain"),
+    "trackpy predict": trackpy_tracker("predict"),
     "laptrack": lambda frames, limit, missed: PEERS["laptrack"](frames, limit, 0),
     "ipan": lambda frames, limit, missed: run_tracker("ipan", frames, limit),
     "goa published": lambda frames, limit, missed: goa_updown(frames, GOAConfig(d_max=limit, initialisation="im1", restart_lost=False)),

@@ -22,10 +22,13 @@ import time
 
 from seedtrack.data.held_out import HeldOutSpec, generate_held_out
 from seedtrack.data.psmg import PSMGSpec, generate_psmg
-from seedtrack.peers import PEERS, PeerFailure, trackpy_linker
+from seedtrack.peers import PEERS, PeerFailure
 from seedtrack.tracking.evaluation import evaluate_tracks
 from seedtrack.tracking.linking import link_goa
 from tables import markdown_table, write_table
+
+# trackpy as bench_held_out runs it, with its documented remedy where it gives up.
+import bench_held_out as held
 
 TOLERANCE = 3.0
 SEED_SETS = {"tuning": 0, "reporting": 1000}
@@ -49,27 +52,10 @@ SCENES = {
 }
 
 
-# Trackers that gave up (trackpy's SubnetOversizeException) on a scene and ran with trackpy's
-# documented remedy, adaptive search, instead; marked * in the table.
-ADAPTIVE: set = set()
-
-
-def _trackpy(mode):
-    def run(frames, limit, missed):
-        memory = 3 if missed else 0
-        try:
-            return trackpy_linker(mode, memory=memory)(frames, limit, 0)
-        except PeerFailure:
-            ADAPTIVE.add(mode)
-            return trackpy_linker("adaptive" if mode == "plain" else "predict-adaptive", memory=memory)(frames, limit, 0)
-
-    return run
-
-
 TRACKERS = {
     "seedtrack": lambda frames, limit, missed: link_goa(frames, "goa-updown")[0],
-    "trackpy": _trackpy("plain"),
-    "trackpy predict": _trackpy("predict"),
+    "trackpy": held.trackpy_tracker("plain"),
+    "trackpy predict": held.trackpy_tracker("predict"),
     "laptrack": lambda frames, limit, missed: PEERS["laptrack"](frames, limit, 0),
 }
 COLUMNS = ("hota", "det_a", "ass_a", "idf1", "isbi_alpha", "isbi_beta", "isbi_jsc", "isbi_jsc_theta", "isbi_rmse_px")
@@ -81,7 +67,7 @@ def table(seeds: range) -> list[list[str]]:
     for label, (draw, limit, missed) in SCENES.items():
         clips = [draw(seed) for seed in seeds]
         for name, tracker in TRACKERS.items():
-            ADAPTIVE.clear()
+            held.ADAPTIVE.clear()
             scores, seconds = [], []
             try:
                 for frames, truth in clips:
@@ -92,7 +78,7 @@ def table(seeds: range) -> list[list[str]]:
             except PeerFailure:
                 rows.append([label, name, *["gave up"] * (len(COLUMNS) + 1)])
                 continue
-            mark = "*" if ADAPTIVE else ""
+            mark = "*" if held.ADAPTIVE else ""
             cells = [f"{statistics.mean(getattr(score, column) for score in scores):.3f}" for column in COLUMNS]
             rows.append([label, name + mark, *cells, f"{statistics.median(seconds):.2f}"])
             print(f"  {label} {name}{mark}: {sum(seconds):.1f} s", file=sys.stderr, flush=True)
