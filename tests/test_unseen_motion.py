@@ -8,7 +8,7 @@ from seedtrack.tracking.gap_closing import join_track_ends, split_through_held
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
-from seedtrack.tracking.persistence import fit_statistics, grid_step
+from seedtrack.tracking.persistence import fit_chains, fit_statistics, grid_step, measured_chains
 from seedtrack.tracking.tracks import Tracks, tracks_from_assignment
 from seedtrack.wording import motion_lines
 
@@ -157,3 +157,18 @@ def test_a_join_is_not_made_through_a_point_another_track_holds():
     parts[2, 5] = 2
     assert join_track_ends(frames, parts, GOAConfig(d_max=5.0), max_gap=10).shape[0] == 3
 
+
+def test_the_fitted_noise_never_falls_below_the_given_localisation_error():
+    # Straight walkers off any grid, with almost no noise: the fit alone finds the 0.1 px floor;
+    # given a localisation error of 0.3 px per axis, a velocity change carries sqrt(6) x 0.3.
+    rng = np.random.default_rng(1)
+    start, step = rng.uniform(0, 200, (20, 2)), rng.uniform(-2, 2, (20, 2))
+    paths = start[:, None] + np.arange(15)[None, :, None] * step[:, None] + rng.normal(0, 1e-3, (20, 15, 2))
+    tracks = Tracks.from_dense(paths, np.tile(np.arange(20)[:, None], (1, 15)))
+    assert fit_chains(measured_chains(tracks)).noise < 0.11
+    stats = fit_chains(measured_chains(tracks, 0.3))
+    assert stats.noise >= np.sqrt(6.0) * 0.3 - 1e-12
+    assert min(stats.along[0], stats.across[0]) >= np.sqrt(6.0) * 0.3 - 1e-12
+    frames, _ = _scene(paths)
+    _, fit = link_goa(frames, config=GOAConfig(localisation_error=0.3))
+    assert fit.config.individual.statistics.noise >= np.sqrt(6.0) * 0.3 - 1e-12
