@@ -124,8 +124,10 @@ def link_goa(
     else:
         fit = fit_to_motion(frames, config, motion, keep_model)
         tracks = track_without_drift(frames, fit.drift, lambda moved: track(moved, fit.config))
+    tracks = _measured_exactly(tracks, frames) if any(fit.drift) else tracks
     # Last, on the positions as reported: a filled-in point never lies on another track's point.
-    return split_through_held(_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
+    # Tracks that open and end anywhere only; the paper's forms keep their count of tracks.
+    return (split_through_held(tracks) if algorithm == "goa-updown" and lifecycle is not None else tracks), fit
 
 
 def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
