@@ -2,6 +2,7 @@
 whole-pixel positions, an end and a start far apart, velocity that reverses."""
 
 import numpy as np
+import pytest
 
 from seedtrack.data.unseen import UnseenSpec, generate_unseen
 from seedtrack.tracking.gap_closing import join_track_ends, split_through_held
@@ -172,3 +173,5 @@ def test_the_fitted_noise_never_falls_below_the_given_localisation_error():
     frames, _ = _scene(paths)
     _, fit = link_goa(frames, config=GOAConfig(localisation_error=0.3))
     assert fit.config.individual.statistics.noise >= np.sqrt(6.0) * 0.3 - 1e-12
+    with pytest.raises(ValueError, match="localisation_error"):
+        GOAConfig(localisation_error=-0.1)
