@@ -2,12 +2,15 @@
 whole-pixel positions, an end and a start far apart, velocity that reverses."""
 
 import numpy as np
+import pytest
 
 from seedtrack.data.unseen import UnseenSpec, generate_unseen
+from seedtrack.tracking.gap_closing import join_track_ends, split_through_held
+from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
-from seedtrack.tracking.persistence import fit_statistics, grid_step
-from seedtrack.tracking.tracks import Tracks
+from seedtrack.tracking.persistence import fit_chains, fit_statistics, grid_step, measured_chains
+from seedtrack.tracking.tracks import Tracks, tracks_from_assignment
 from seedtrack.wording import motion_lines
 
 
@@ -100,3 +103,75 @@ def test_the_crossing_repair_weighs_a_bounded_number_of_pairs(monkeypatch):
     repair.resolve_crossings(tracks, stats)
     points = sum(f.shape[0] for f in frames)
     assert 0 < len(calls) <= repair._SWEEPS * len(frames) + repair._REWEIGHED_SHARE * points
+
+
+def _filled_on_others(tracks: Tracks) -> int:
+    """Filled-in positions within 0.5 px of a measured point another track holds in that frame."""
+    measured = tracks.present & (tracks.measurement >= 0)
+    count = 0
+    for track, frame in zip(*np.nonzero(tracks.present & ~measured)):
+        others = measured[:, frame].copy()
+        others[track] = False
+        count += int((np.hypot(*(tracks.xy[others, frame] - tracks.xy[track, frame]).T) <= 0.5).any())
+    return count
+
+
+def test_no_filled_point_lies_on_a_point_another_track_holds():
+    # One walker whose points two tracks took in turns (as whole-pixel walkers once were): each
+    # track's gaps were filled with points on the other's measured points, 8 of them here. A
+    # second object missed in frame 4, with nothing where it was, keeps its filled point.
+    walker = [np.array([[10.0 + 2 * k, 10.0]]) for k in range(10)]
+    other = [np.array([[10.0 + 2 * k, 60.0]]) for k in range(10)]
+    frames = [np.concatenate((w, o)) if k != 4 else w for k, (w, o) in enumerate(zip(walker, other))]
+    turns = np.full((3, 10), -1, np.int64)
+    turns[0, ::2] = turns[1, 1::2] = 0
+    turns[2] = 1
+    turns[2, 4] = -1
+    before = tracks_from_assignment(frames, turns)
+    assert _filled_on_others(before) == 8
+    tracks = split_through_held(before)
+    assert _filled_on_others(tracks) == 0
+    assert tracks.interpolated.sum() == 1 and tracks.present.sum() == 20
+    assert split_through_held(tracks) is tracks
+
+
+def test_link_goa_leaves_no_filled_point_on_another_tracks_point():
+    # The swarm of the held-out table (tuning seed 0): 150 points in 80 px, where before some
+    # filled-in points lay on points other tracks held.
+    frames, _ = generate_unseen(UnseenSpec(kind="swarm", points=150, speed=4.0, size=80.0, frames=20, random_seed=0))
+    tracks, _ = link_goa(frames)
+    assert tracks.interpolated.any()
+    assert _filled_on_others(tracks) == 0
+
+
+def test_a_join_is_not_made_through_a_point_another_track_holds():
+    # A track ends at frame 4 and another starts at frame 7 on its line; a third track holds a
+    # point on that line in frame 5: the object was seen there, so the two are not joined.
+    line = [np.array([[10.0 + 2 * k, 10.0]]) for k in range(12)]
+    frames = [np.concatenate((p, [[30.0 + k, 40.0 - 3 * k]])) for k, p in enumerate(line)]
+    parts = np.full((3, 12), -1, np.int64)
+    parts[0, :5] = parts[1, 7:] = 0
+    parts[2] = 1
+    joined = join_track_ends(frames, parts, GOAConfig(d_max=5.0), max_gap=10)
+    assert joined.shape[0] == 2
+    frames[5] = np.concatenate((frames[5], [[20.0, 10.0]]))
+    parts[2, 5] = 2
+    assert join_track_ends(frames, parts, GOAConfig(d_max=5.0), max_gap=10).shape[0] == 3
+
+
+def test_the_fitted_noise_never_falls_below_the_given_localisation_error():
+    # Straight walkers off any grid, with almost no noise: the fit alone finds the 0.1 px floor;
+    # given a localisation error of 0.3 px per axis, a velocity change carries sqrt(6) x 0.3.
+    rng = np.random.default_rng(1)
+    start, step = rng.uniform(0, 200, (20, 2)), rng.uniform(-2, 2, (20, 2))
+    paths = start[:, None] + np.arange(15)[None, :, None] * step[:, None] + rng.normal(0, 1e-3, (20, 15, 2))
+    tracks = Tracks.from_dense(paths, np.tile(np.arange(20)[:, None], (1, 15)))
+    assert fit_chains(measured_chains(tracks)).noise < 0.11
+    stats = fit_chains(measured_chains(tracks, 0.3))
+    assert stats.noise >= np.sqrt(6.0) * 0.3 - 1e-12
+    assert min(stats.along[0], stats.across[0]) >= np.sqrt(6.0) * 0.3 - 1e-12
+    frames, _ = _scene(paths)
+    _, fit = link_goa(frames, config=GOAConfig(localisation_error=0.3))
+    assert fit.config.individual.statistics.noise >= np.sqrt(6.0) * 0.3 - 1e-12
+    with pytest.raises(ValueError, match="localisation_error"):
+        GOAConfig(localisation_error=-0.1)

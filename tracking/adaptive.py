@@ -105,7 +105,7 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     """
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
     first, first_fit = first_pass(frames, config, track)
-    chains = measured_chains(first)
+    chains = measured_chains(first, config.localisation_error)
     if chains is None:
         return first, first_fit
     # The first pass's tracks are not needed any more: freed, they add neither to the fit's peak
@@ -120,7 +120,7 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     unlimited = replace(config, d_max=None)
     tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
     for _ in range(REFITS):
-        chains = measured_chains(tracks)
+        chains = measured_chains(tracks, config.localisation_error)
         del tracks
         # Too few chains to measure on (rare after a first pass had enough): the same statistics
         # again, so that the passes, and the progress calls, are as announced.

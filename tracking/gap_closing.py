@@ -19,13 +19,15 @@ model a join is made only where it is likelier than the end and the start being 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .assignment import UNASSIGNED, solve_split
 from .goa import GOAConfig, HeadState, assign_step
 from .motion import Candidates
+from .tracks import Tracks
 
 # Missed frames in a row across which a track end takes a free measurement after the passes. In the
 # passes a head back from slaves keeps its point only if a point continues it in one of the next two
@@ -36,6 +38,11 @@ from .motion import Candidates
 # bead-like walkers with satellites (bench_beads.py, seeds 0-2) 3 took the link error from 0.0274 to
 # 0.0280 where 1 kept 0.0275 (reproduced 0.632 -> 0.651), as ends took satellites across the gap.
 _EXTEND_ACROSS = 1
+# A bridge that passes within this distance (pixels) of a measured point another track holds in
+# one of its missed frames goes through that point: the object was not missed there, and the
+# end and the start are two tracks taking turns at one object or two objects joined across it.
+# Half a pixel: rounded to whole pixels, a point and one off it by less round to the same pixel.
+_ON_POINT = 0.5
 
 
 @dataclass(frozen=True)
@@ -258,6 +265,8 @@ def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config
     into = config.individual.cost(bridge, config.phi_max, scale)
     out = config.individual.cost(leaving, config.phi_max, scale)
     valid = (into <= config.phi_max) & (out <= config.phi_max)
+    # A bridge through a point another track holds is no miss: the object was seen there.
+    valid[valid] = ~_through_held(lambda k: frames[k][assignment[:, k][assignment[:, k] != UNASSIGNED]], last[end[valid]], end_xy[end[valid]], start_xy[start[valid]], gap[valid])
     odds = config.individual.join_costs(bridge, leaving) if hasattr(config.individual, "join_costs") else None
     if odds is not None:
         # A measured model weighs each join against the end and the start being two objects,
@@ -274,6 +283,95 @@ def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config
     unmatched = (2 + max_gap) * config.phi_max / 2
     successor = solve_split(n_tracks, n_tracks, end, start, weight, unmatched)
     return _chain(assignment, successor)
+
+
+def split_through_held(tracks: Tracks) -> Tracks:
+    """``tracks`` split at every run of filled-in points one of which lies on a measured point
+    another track holds: the object was seen there, so the parts either side are not one
+    object missed (two tracks taking turns at one object, or two objects).
+
+    Parameters
+    ----------
+    tracks : Tracks
+
+    Returns
+    -------
+    Tracks
+        ``tracks`` itself when nothing is split; otherwise the split runs' filled-in points are
+        gone and each part after one is a track of its own, right after the part before it.
+
+    Example
+    -------
+    One walker whose points two tracks took in turns: each fills its missed frames with points
+    on the other's, so every part is one point.
+
+    >>> from seedtrack.tracking.tracks import tracks_from_assignment
+    >>> frames = [np.array([[float(k), 0.0]]) for k in range(5)]
+    >>> turns = tracks_from_assignment(frames, np.array([[0, -1, 0, -1, 0], [-1, 0, -1, 0, -1]]))
+    >>> turns.interpolated.sum(), split_through_held(turns).n_tracks, split_through_held(turns).interpolated.sum()
+    (np.int64(3), 5, np.int64(0))
+    """
+    filled = np.flatnonzero(tracks.point_interpolated)
+    if filled.size == 0:
+        return tracks
+    measured = np.flatnonzero(~tracks.point_interpolated)
+    column = tracks.point_column[measured]
+    by_column = measured[np.argsort(column, kind="stable")]
+    bounds = np.searchsorted(tracks.point_column[by_column], np.arange(tracks.n_frames + 1))
+    on = _near_held(lambda k: tracks.point_xy[by_column[bounds[k] : bounds[k + 1]]], tracks.point_column[filled], tracks.point_xy[filled])
+    if not on.any():
+        return tracks
+    # Runs of filled-in points (a track's points are in frame order, and a run ends before the
+    # track's next measured point); a run with a point on a held one goes, and the track is cut.
+    track = tracks.point_track
+    opens = np.r_[True, (filled[1:] != filled[:-1] + 1) | (track[filled[1:]] != track[filled[:-1]])]
+    run = np.cumsum(opens) - 1
+    cut = np.zeros(run[-1] + 1, bool)
+    cut[run[on]] = True
+    keep = np.ones(track.size, bool)
+    keep[filled[cut[run]]] = False
+    starts = np.r_[True, track[1:] != track[:-1]]
+    ends = np.r_[opens[1:], True]
+    after = filled[ends & cut[run]] + 1
+    starts[after[after < track.size]] = True
+    number = np.cumsum(starts) - 1
+    return Tracks(
+        tracks.n_frames,
+        number[keep],
+        tracks.point_column[keep],
+        tracks.point_xy[keep],
+        tracks.point_measurement[keep],
+        tracks.point_interpolated[keep],
+        tracks.first_frame,
+    )
+
+
+def _through_held(held: Callable[[int], np.ndarray], last: np.ndarray, end_xy: np.ndarray, start_xy: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """Boolean per bridge from ``end_xy`` in frame ``last`` to ``start_xy`` ``gap`` frames later:
+    a point filled in on the straight line between them (as the tracks fill missed frames) lies
+    on one of ``held(k)`` (see :func:`_near_held`)."""
+    through = np.zeros(gap.size, bool)
+    bridge, step = np.nonzero(np.arange(1, max(int(gap.max(initial=1)), 1))[None, :] < gap[:, None])
+    if bridge.size == 0:
+        return through
+    step = step + 1
+    filled = end_xy[bridge] + (step / gap[bridge])[:, None] * (start_xy[bridge] - end_xy[bridge])
+    through[bridge[_near_held(held, last[bridge] + step, filled)]] = True
+    return through
+
+
+def _near_held(held: Callable[[int], np.ndarray], column: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """Boolean per point (``xy`` (P, 2) in frames ``column``): within ``_ON_POINT`` of one of
+    ``held(k)``, the positions (Q, 2) of the measurements tracks hold in frame k."""
+    near = np.zeros(column.size, bool)
+    for k in np.unique(column):
+        points = held(int(k))
+        if points.shape[0] == 0:
+            continue
+        here = np.flatnonzero(column == k)
+        distance = cKDTree(points).query(xy[here], distance_upper_bound=np.nextafter(_ON_POINT, np.inf))[0]
+        near[here[np.isfinite(distance)]] = True
+    return near
 
 
 def _chain(assignment: np.ndarray, successor: np.ndarray) -> np.ndarray:
@@ -295,4 +393,4 @@ def _chain(assignment: np.ndarray, successor: np.ndarray) -> np.ndarray:
     return merged
 
 
-__all__ = ["FillGaps", "extend_track_ends", "pair_at_view_edge", "join_track_ends"]
+__all__ = ["FillGaps", "extend_track_ends", "pair_at_view_edge", "join_track_ends", "split_through_held"]

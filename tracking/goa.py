@@ -103,6 +103,10 @@ class GOAConfig:
     solver : {"split", "dense"}
         Solve each frame per connected component of the gated graph (fast), or the whole
         augmented matrix at once (the paper's form; for checking).
+    localisation_error : float
+        Localisation error of the positions, pixels per axis (standard deviation; 0 when not
+        known). The measured motion model's noise never falls below what it puts on a velocity
+        change (sqrt(6) times it), nor below what positions on a grid can hold.
     """
 
     individual: IndividualModel = field(default_factory=IndividualModel)
@@ -116,6 +120,7 @@ class GOAConfig:
     neighbours: int = 24
     restart_lost: bool = True
     solver: str = "split"
+    localisation_error: float = 0.0
 
     def __post_init__(self) -> None:
         check_limit("phi_max", self.phi_max, optional=False)
@@ -129,6 +134,8 @@ class GOAConfig:
         if self.neighbours < 1:
             raise ValueError(f"neighbours must be at least 1, got {self.neighbours}")
         _check_choice("solver", self.solver, SOLVERS)
+        if not np.isfinite(self.localisation_error) or self.localisation_error < 0:
+            raise ValueError(f"localisation_error must be a non-negative number of pixels, got {self.localisation_error}")
 
     @property
     def unmatched_weight(self) -> float:

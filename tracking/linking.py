@@ -15,6 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .gap_closing import split_through_held
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
@@ -123,7 +124,10 @@ def link_goa(
     else:
         fit = fit_to_motion(frames, config, motion, keep_model)
         tracks = track_without_drift(frames, fit.drift, lambda moved: track(moved, fit.config))
-    return (_measured_exactly(tracks, frames) if any(fit.drift) else tracks), fit
+    tracks = _measured_exactly(tracks, frames) if any(fit.drift) else tracks
+    # Last, on the positions as reported: a filled-in point never lies on another track's point.
+    # Tracks that open and end anywhere only; the paper's forms keep their count of tracks.
+    return (split_through_held(tracks) if algorithm == "goa-updown" and lifecycle is not None else tracks), fit
 
 
 def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:

@@ -208,6 +208,9 @@ class Chains:
         Measured points per frame per square pixel of the box they fill.
     resolution : float
         Step of the grid the positions lie on, pixels (:func:`grid_step`); 0 for none.
+    localisation : float
+        Given localisation error of the positions, pixels per axis (standard deviation); 0 for
+        none known.
     """
 
     before: np.ndarray
@@ -219,10 +222,12 @@ class Chains:
     ended: float | None = None
     started: float | None = None
     resolution: float = 0.0
+    localisation: float = 0.0
 
 
-def measured_chains(tracks: Tracks) -> Chains | None:
-    """The three-frame chains of ``tracks`` (see :func:`fit_statistics`), None when fewer than 10.
+def measured_chains(tracks: Tracks, localisation: float = 0.0) -> Chains | None:
+    """The three-frame chains of ``tracks`` (see :func:`fit_statistics`), None when fewer than 10;
+    ``localisation`` (pixels per axis) is the positions' given localisation error.
 
     Apart from the fit so that a caller can let the tracks go before it: on a million points
     their arrays were 41 MB of the fit's peak.
@@ -272,7 +277,7 @@ def measured_chains(tracks: Tracks) -> Chains | None:
     del velocities
     b_all -= drift
     a_all -= drift
-    return Chains(b_all, a_all, drift, spread, missed, density, ended, started, resolution)
+    return Chains(b_all, a_all, drift, spread, missed, density, ended, started, resolution, localisation)
 
 
 def grid_step(xy: np.ndarray) -> float:
@@ -332,7 +337,9 @@ def fit_chains(chains: Chains) -> MotionStatistics:
     # velocity change (x2 - 2 x1 + x0) by 6 times that. Below this floor whole-pixel walkers,
     # many of whose changes are exactly 0, were fitted 0.1 px of noise, a point 0.5 px off its
     # prediction cost more than a miss, and one walker became two tracks taking turns.
-    floor = max(_MIN_NOISE, chains.resolution / np.sqrt(2.0))
+    # A localisation error sigma per axis, independent from point to point, puts 6 sigma**2 on
+    # each velocity change in the same way.
+    floor = max(_MIN_NOISE, chains.resolution / np.sqrt(2.0), np.sqrt(6.0) * chains.localisation)
     speed2 = np.einsum("ij,ij->i", b_all, b_all)
     # First round: links whose change is within the cut of the median change (as if the noise
     # did not depend on the speed), so a first pass's wrong links cannot steer the start.
