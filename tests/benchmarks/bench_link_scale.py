@@ -4,7 +4,7 @@ Run as ``python tests/benchmarks/bench_link_scale.py [--bulk DETECTIONS.csv] [--
 
 Random walkers (``seedtrack.data.walkers``, step sigma 1.5 px/axis, 300 walkers per 512 x 512 px,
 the view grown with the count) over ``--frames`` frames, and the detections of the bulk-water
-clip (``--bulk``: a csv of ``seedtrack detect``; without it the clip in /work/shared/data is
+clip (``--bulk``: a csv of ``seedtrack detect``; without it the clip in shared/data beside the checkout is
 detected once into a temporary folder). Both linkers run in this process, warmed up first
 (imports, numba's compilation), in turns, each size ``--repeats`` times (median). trackpy's
 ``search_range`` is the fastest speed seedtrack measured on the same points (its speed limit over
@@ -39,7 +39,9 @@ import seedtrack
 from seedtrack.data.walkers import WalkerSpec, generate_walkers
 from seedtrack.tracking.adaptive import SPEED_MARGIN
 
-BULK_CLIP = Path("/work/shared/data/bulk-water-240-479.mp4")
+# trackpy's clip, found where bench_bulk_water finds it (shared/data beside the checkout).
+from bench_bulk_water import CLIP as BULK_CLIP
+
 # Walkers per 512 x 512 px: WalkerSpec's default scene.
 DENSITY = 300 / 512**2
 # IDF1 (seedtrack.evaluate) up to this many walkers a frame; link error at every size.
