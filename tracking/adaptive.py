@@ -14,6 +14,11 @@ between is the blend the data show. The statistics are then measured once more, 
 they gave, and the points tracked again with those (``REFITS``): where the first pass is poor the
 first statistics are too wide, but the tracks they give are mostly right.
 
+The statistics need enough chains, not every point: the first pass and the refit's pass run on a
+sample of at most ``SAMPLE_POINTS`` points (:func:`measuring_sample`: the middle frames, and a
+window of the view about its centre where even ``SAMPLE_FRAMES`` frames hold more), and only the
+last pass tracks every point. A clip no larger than the sample is measured on all of it.
+
 The speed limit only removes links. Without one from the user, the final pass is limited to
 twice the fastest speed (99th percentile) on the chains that fit the statistics.
 """
@@ -70,10 +75,18 @@ REFITS = 1
 # that no line of persistence flips how long heads last.
 RANDOM_WALK_SLAVES = 3
 
+# Points the motion is measured on (the first pass and the refits' passes), at most: the
+# statistics need enough chains, not every point.
+SAMPLE_POINTS = 20_000
+# Frames a sample spans, at least (all of a shorter clip): where fewer frames would hold
+# SAMPLE_POINTS, a window of the view is cut from this many instead, so that tracks run long
+# enough to measure on (chains, misses, ends) whatever the density.
+SAMPLE_FRAMES = 20
+
 Track = Callable[[list[np.ndarray], GOAConfig], Tracks]
 
 
-def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track: Track) -> tuple[Tracks, MotionFit]:
+def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track: Track, measure: Track | None = None) -> tuple[Tracks, MotionFit]:
     """``track(frames, config)`` with the motion model measured on a first pass.
 
     Parameters
@@ -86,6 +99,10 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     track : callable
         ``track(frames, config) -> Tracks``, e.g. open GOA-updown; column k of its tracks must be
         ``frames[k]``.
+    measure : callable, optional
+        As ``track``, for the passes on a sample of the clip (:func:`measuring_sample`) when it
+        is not the whole clip; None: ``track``. For a tracker given what only the whole clip's
+        frames mean (the first two frames' links).
 
     Returns
     -------
@@ -104,8 +121,17 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     10
     """
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
-    first, first_fit = first_pass(frames, config, track)
+    sample = measuring_sample(frames)
+    if sample is frames or measure is None:
+        measure = track
+    first, first_fit = first_pass(sample, config, measure)
     chains = measured_chains(first, config.localisation_error)
+    if chains is None and sample is not frames:
+        # Fewer than ten chains in tens of thousands of points: measured on them all, as a clip
+        # that small would be.
+        sample, measure = frames, track
+        first, first_fit = first_pass(sample, config, measure)
+        chains = measured_chains(first, config.localisation_error)
     if chains is None:
         return first, first_fit
     # The first pass's tracks are not needed any more: freed, they add neither to the fit's peak
@@ -118,8 +144,10 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     # the end. GOA is greedy in time: removing links it would not have made still changed what it
     # made later (a dish of 400 seeds lost seeds to the true limit, tracked again under it).
     unlimited = replace(config, d_max=None)
-    tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
+    # Each pass but the last tracks the sample, to measure on; the last tracks every point. With
+    # the whole clip as the sample this is the first pass, then 1 + REFITS final passes.
     for _ in range(REFITS):
+        tracks = _final_pass(sample, measured_config(unlimited, statistics), statistics, measure)
         chains = measured_chains(tracks, config.localisation_error)
         del tracks
         # Too few chains to measure on (rare after a first pass had enough): the same statistics
@@ -127,7 +155,8 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
         if chains is not None:
             statistics = fit_chains(chains)
         del chains
-        tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
+    del sample
+    tracks = _final_pass(frames, measured_config(unlimited, statistics), statistics, track)
     fitted = measured_config(config, statistics)
     given = config.d_max is not None
     if given and fitted.d_max < measured_config(unlimited, statistics).d_max:
@@ -136,6 +165,56 @@ def track_measured_motion(frames: Sequence[np.ndarray], config: GOAConfig, track
     limit = f"speed limit {fitted.d_max:.2f} px/frame" + (" (given)" if given else " (measured)")
     measured = f"{statistics.describe()}, drift ({drift[0]:.2f}, {drift[1]:.2f}) px/frame; {limit}"
     return tracks, MotionFit(first_fit.choice, fitted, drift, measured)
+
+
+def sample_frames(counts: Sequence[int]) -> range:
+    """The frames the motion is measured on, from the points in each (``counts``): the longest run
+    about the middle of the clip that holds at most ``SAMPLE_POINTS`` points, and at least
+    ``SAMPLE_FRAMES`` frames (the whole clip when shorter); 0-based frame indices.
+
+    Example
+    -------
+    >>> sample_frames([1000] * 100), sample_frames([1000] * 10), sample_frames([10] * 50)
+    (range(40, 60), range(0, 10), range(0, 50))
+    """
+    n = len(counts)
+    held = np.concatenate(([0], np.cumsum(counts, dtype=np.int64)))
+    lengths = np.arange(1, n + 1)
+    starts = (n - lengths) // 2
+    # Each run holds the one before (it starts at or one before it and ends at or one after it),
+    # so the points held grow with the length.
+    length = max(min(SAMPLE_FRAMES, n), int(np.count_nonzero(held[starts + lengths] - held[starts] <= SAMPLE_POINTS)))
+    start = (n - length) // 2
+    return range(start, start + length)
+
+
+def measuring_sample(frames: list[np.ndarray]) -> list[np.ndarray]:
+    """The points the motion is measured on: the frames :func:`sample_frames` chooses, and where
+    they hold more than ``SAMPLE_POINTS`` points, those inside the smallest square about the
+    centre of their bounding box that holds that many (pixels; the view may cut it). ``frames``
+    itself when that is all of it.
+
+    Example
+    -------
+    >>> grid = np.stack(np.meshgrid(np.arange(200.0), np.arange(200.0)), axis=-1).reshape(-1, 2)
+    >>> sample = measuring_sample([grid] * 10)
+    >>> len(sample), sample[0].shape[0], sample[0].min(axis=0).tolist()
+    (10, 2116, [77.0, 77.0])
+    """
+    counts = [f.shape[0] for f in frames]
+    block = sample_frames(counts)
+    if sum(counts) <= SAMPLE_POINTS:
+        return frames
+    chosen = frames[block.start : block.stop]
+    if sum(counts[block.start : block.stop]) <= SAMPLE_POINTS:
+        return chosen
+    low = np.min([f.min(axis=0) for f in chosen if f.shape[0]], axis=0)
+    high = np.max([f.max(axis=0) for f in chosen if f.shape[0]], axis=0)
+    centre = (low + high) / 2.0
+    reach = [np.max(np.abs(f - centre), axis=1) for f in chosen]
+    joined = np.concatenate(reach)
+    half = np.partition(joined, SAMPLE_POINTS - 1)[SAMPLE_POINTS - 1]
+    return [f[r <= half] for f, r in zip(chosen, reach)]
 
 
 def _final_pass(frames: list[np.ndarray], fitted: GOAConfig, statistics: MotionStatistics, track: Track) -> Tracks:
@@ -242,4 +321,4 @@ def without_faster_links(tracks: Tracks, limit: float) -> Tracks:
     )
 
 
-__all__ = ["track_measured_motion", "first_pass", "measured_config", "head_slaves", "without_faster_links", "MEASURED_MOTION_GATE_SIGMAS", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]
+__all__ = ["track_measured_motion", "first_pass", "sample_frames", "measuring_sample", "SAMPLE_POINTS", "SAMPLE_FRAMES", "measured_config", "head_slaves", "without_faster_links", "MEASURED_MOTION_GATE_SIGMAS", "SPEED_MARGIN", "FIRST_LINK_SCALE", "REFITS", "RANDOM_WALK_SLAVES"]
