@@ -76,12 +76,19 @@ REFITS = 1
 RANDOM_WALK_SLAVES = 3
 
 # Points the motion is measured on (the first pass and the refits' passes), at most: the
-# statistics need enough chains, not every point.
+# statistics need enough chains, not every point. On walkers and PSMG (tuning seeds 0 and 1)
+# every size from 2,500 measured the same; a dish with 15% of its seeds missed over 300 frames
+# lost its tracks on one seed or both measured on 10,000 points or fewer, none on 20,000 or on all
+# (docs/speed-linking.md).
 SAMPLE_POINTS = 20_000
 # Frames a sample spans, at least (all of a shorter clip): where fewer frames would hold
 # SAMPLE_POINTS, a window of the view is cut from this many instead, so that tracks run long
-# enough to measure on (chains, misses, ends) whatever the density.
-SAMPLE_FRAMES = 20
+# enough to measure on (chains, misses, ends) whatever the density. Tumbling runs of 1,000 points
+# over 60 frames (tuning seeds 0-3) measured on 20 frames: one seed of four kept the first pass's
+# absurd speeds (limit about 200 px/frame for motion at 4) and lost its tracks (link error 0.13);
+# on 40 frames, a window of half the view, the four tracked as measured on all 60 (link error
+# 0.0125 against 0.0126), in a sixth of the CPU.
+SAMPLE_FRAMES = 40
 
 Track = Callable[[list[np.ndarray], GOAConfig], Tracks]
 
@@ -174,8 +181,8 @@ def sample_frames(counts: Sequence[int]) -> range:
 
     Example
     -------
-    >>> sample_frames([1000] * 100), sample_frames([1000] * 10), sample_frames([10] * 50)
-    (range(40, 60), range(0, 10), range(0, 50))
+    >>> sample_frames([100] * 1000), sample_frames([1000] * 100), sample_frames([1000] * 10)
+    (range(400, 600), range(30, 70), range(0, 10))
     """
     n = len(counts)
     held = np.concatenate(([0], np.cumsum(counts, dtype=np.int64)))
