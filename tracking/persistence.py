@@ -324,18 +324,15 @@ def _returns(tracks: Tracks, spread: float, box: float) -> tuple[float, ...]:
     start_column, end_column = column[first], column[last]
     n = tracks.n_frames
     rate = np.count_nonzero(start_column > 0) / (max(n - 1, 1) * box)
-    by_start = np.argsort(start_column, kind="stable")
-    bounds = np.searchsorted(start_column[by_start], np.arange(n + 1))
+    # One search for all frames: the frame is a third coordinate, frames farther apart than any
+    # radius, so that only starts of the one frame asked for lie within it.
+    apart = 2.0 * 3.0 * spread * np.sqrt(2.0 * _RETURN_GAPS) + 1.0
+    starts = cKDTree(np.column_stack((xy[first], start_column * apart)))
     returns = []
     for gap in range(2, _RETURN_GAPS + 1):
         radius = 3.0 * spread * np.sqrt(2.0 * gap)
-        ends = np.flatnonzero(end_column + gap < n)
-        found = 0
-        for k in np.unique(end_column[ends]):
-            starts = first[by_start[bounds[k + gap] : bounds[k + gap + 1]]]
-            if starts.size:
-                here = last[ends[end_column[ends] == k]]
-                found += int(np.sum(cKDTree(xy[starts]).query_ball_point(xy[here], radius, return_length=True)))
+        ends = last[end_column + gap < n]
+        found = int(np.sum(starts.query_ball_point(np.column_stack((xy[ends], (column[ends] + gap) * apart)), radius, return_length=True)))
         chance = ends.size * rate * np.pi * radius**2
         returns.append(min(max(found - chance - 2.0 * float(np.sqrt(chance)), 0.0) / max(ends.size, 1), 1.0))
     return tuple(returns)
