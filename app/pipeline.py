@@ -33,7 +33,7 @@ from seedtrack.data.depth import to_bgr8
 from seedtrack.data.frames import IMAGE_SUFFIXES, FrameSource, open_frames, read_mask
 from seedtrack.data.outputset import MANIFEST, RUN_FILES, output_set
 from seedtrack.data.trackfile import write_tracks
-from seedtrack.data.video import PREVIEW_PRESET
+from seedtrack.data.video import PREVIEW_CRF, PREVIEW_PRESET
 from seedtrack.detection.background import temporal_median
 from seedtrack.detection.blobs import BlobOptions, to_gray
 from seedtrack.detection.choice import DetectorChoice
@@ -495,7 +495,7 @@ def run_pipeline(
 
     Detection is :func:`detect_clip`, tracking :func:`track_frames` (``verbose``: the motion in
     detail); the overlay is a preview, encoded with x264's
-    :data:`~seedtrack.data.video.PREVIEW_PRESET`. Detection and drawing use
+    :data:`~seedtrack.data.video.PREVIEW_PRESET` at :data:`~seedtrack.data.video.PREVIEW_CRF`. Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
     tracking, while the overlay's frames decode beside tracking; the files are the same for any
     number.
@@ -520,7 +520,7 @@ def run_pipeline(
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
         # The encoder's process starts beside tracking, which runs on one core.
         # The overlay's frames start decoding now too, beside tracking.
-        with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET) as encoder, _overlay_frames(clip, detection, workers) as frames:
+        with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET, PREVIEW_CRF) as encoder, _overlay_frames(clip, detection, workers) as frames:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
             write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
             _render(frames, tracks, detections, encoder, TRAIL, workers)
