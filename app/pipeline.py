@@ -518,8 +518,8 @@ def run_pipeline(
         write_table(paths["detections.csv"], rows)
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
-        # The encoder's process starts beside tracking, which runs on one core.
-        # The overlay's frames start decoding now too, beside tracking.
+        # The encoder's process starts, and the overlay's frames decode, beside tracking, which
+        # runs on one core.
         with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET, PREVIEW_CRF) as encoder, _overlay_frames(clip, detection, workers) as frames:
             tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
             write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
