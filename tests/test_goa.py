@@ -170,16 +170,17 @@ def test_given_heads_keep_their_columns_and_the_others_are_associated_around_the
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed):
+@pytest.mark.parametrize("n", [15, 300, 1500])
+def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed, n):
     # Integer positions and radii put points exactly on the circles (3-4-5 steps): the exact
     # test must keep them as query_ball_point does; radii of several sizes and infinite ones
-    # go through the classes and the all-points path.
+    # go through the classes and the all-points path. 15 origins are tested against every
+    # point, 300 queried one by one, 1500 searched by radius class.
     from scipy.spatial import cKDTree
 
     from seedtrack.tracking.initialisation import pairs_within
 
     rng = np.random.default_rng(seed)
-    n = 1500  # above the count below which each origin is queried alone
     origins = rng.integers(0, 80, (n, 2)).astype(float)
     points = rng.integers(0, 80, (400, 2)).astype(float)
     radius = rng.integers(0, 12, n).astype(float)

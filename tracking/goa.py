@@ -26,7 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .assignment import UNASSIGNED, solve_dense, solve_split
-from .initialisation import first_links, pairs_within
+from .initialisation import first_links, pairs_within, shared_trees, tree_of
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
 from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
@@ -221,7 +221,7 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
             measurements.append(target)
         unbounded = alive[~np.isfinite(limit[alive])]
         if unbounded.size:
-            heads_u, measurements_u = _unbounded_pairs(cKDTree(points), state.last_xy[unbounded], points.shape[0], config)
+            heads_u, measurements_u = _unbounded_pairs(tree_of(points), state.last_xy[unbounded], points.shape[0], config)
             heads.append(unbounded[heads_u])
             measurements.append(measurements_u)
     head = np.concatenate(heads) if heads else np.empty(0, np.int64)
@@ -422,6 +422,19 @@ def goa_pass(
         Measurement index per track and frame, -1 for a slave or where it does not run. Given
         heads come first, in their order, then tracks in the order they opened.
     """
+    with shared_trees(frames):
+        return _goa_pass(frames, initial, config, progress, start, end, given)
+
+
+def _goa_pass(
+    frames: Sequence[np.ndarray],
+    initial: np.ndarray,
+    config: GOAConfig,
+    progress: Progress | None,
+    start: TrackStart | None,
+    end: TrackEnd | None,
+    given: np.ndarray | None,
+) -> np.ndarray:
     n = len(frames)
     initial = np.asarray(initial, dtype=np.int64)
     heads = Heads(n)
@@ -439,9 +452,12 @@ def goa_pass(
             state = heads.state[running]
             # Measurements that given heads hold are theirs.
             index = np.flatnonzero(free[step])
-            taken = assign_step(state, step, frames[step][index], config)
-            held = taken != UNASSIGNED
-            taken[held] = index[taken[held]]
+            # The frame itself where all of it is free, so that its shared tree serves.
+            whole = index.size == frames[step].shape[0]
+            taken = assign_step(state, step, frames[step] if whole else frames[step][index], config)
+            if not whole:
+                held = taken != UNASSIGNED
+                taken[held] = index[taken[held]]
             if end is not None:
                 taken = end.confirm_returns(state, step, frames, free, taken, config)
             heads.take(running, state, step, taken, frames[step])

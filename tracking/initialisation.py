@@ -10,8 +10,10 @@ continuation for one frame by chance, but hardly for several in a row.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
-from typing import Sequence
+import threading
+from typing import Iterator, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -35,28 +37,97 @@ _RADIUS_CLASS = 1.5
 # Below this many origins pairs_within asks one query per origin: a few trees cost more than the
 # queries (100 origins: 0.06 ms against 0.17; equal about 1,200).
 _ONE_QUERY_EACH_BELOW = 1000
+# Up to this many (origin, point) distances pairs_within measures them all: a tree of a frame's
+# points costs more than that (555 points: 60 us to build against 20 us for 10 origins' distances;
+# a head back from slaves is checked against whole frames this way at most steps).
+_ALL_DISTANCES_UP_TO = 8192
 _SMALLEST_RADIUS = 1e-300
+
+
+class _SharedTrees(threading.local):
+    """The KD-trees of the frames of the passes running in this thread (:func:`shared_trees`)."""
+
+    def __init__(self) -> None:
+        self.frames: dict[int, np.ndarray] = {}
+        self.trees: dict[int, cKDTree] = {}
+
+
+_SHARED = _SharedTrees()
+# Trees kept at once: a pass looks at the frames about its step, so older ones are let go (a
+# million points hold about 60 MB of trees).
+_TREES_KEPT = 6
+
+
+@contextlib.contextmanager
+def shared_trees(frames: Sequence[np.ndarray]) -> Iterator[None]:
+    """Within the block, :func:`tree_of` builds the KD-tree of each of ``frames`` once.
+
+    A pass asks for a frame's tree at its step, when it confirms a head back from slaves by the
+    next frames, and when it opens tracks (on bulk water four trees of each frame a pass, a
+    fifth of its time). The frames must not change within the block.
+
+    Example
+    -------
+    >>> frames = [np.zeros((3, 2)), np.ones((4, 2))]
+    >>> with shared_trees(frames):
+    ...     tree_of(frames[1]) is tree_of(frames[1])
+    True
+    """
+    added = [f for f in frames if id(f) not in _SHARED.frames]
+    _SHARED.frames.update((id(f), f) for f in added)
+    try:
+        yield
+    finally:
+        for f in added:
+            del _SHARED.frames[id(f)]
+            _SHARED.trees.pop(id(f), None)
+
+
+def tree_of(points: np.ndarray) -> cKDTree:
+    """The KD-tree of ``points`` (M, 2), pixels: built once for a frame of :func:`shared_trees`."""
+    key = id(points)
+    if _SHARED.frames.get(key) is not points:
+        return cKDTree(points)
+    tree = _SHARED.trees.pop(key, None)
+    if tree is None:
+        tree = cKDTree(points)
+        if len(_SHARED.trees) >= _TREES_KEPT:
+            del _SHARED.trees[next(iter(_SHARED.trees))]
+    _SHARED.trees[key] = tree
+    return tree
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All (origin, point) index pairs with the point within the origin's radius (pixels),
     ordered by origin, then by point: the pairs of cKDTree.query_ball_point, found faster.
 
-    Origins whose radii are within a factor _RADIUS_CLASS of each other are searched together,
-    one tree against the other at their largest radius, then each pair is kept by the test
-    query_ball_point makes (squared distance at most the squared radius). One query per origin,
-    with a Python list of its points, took 1.9 us an origin at 10,000 a frame and 2.9 at 100,000
-    (their queries in random order miss the cache); this takes about a quarter of that with radii
-    alike. Fewer origins than _ONE_QUERY_EACH_BELOW are queried one by one, which costs less there.
+    A point is within when its squared distance is at most the squared radius, the test
+    query_ball_point makes. Few origins and points are tested all against all. Origins whose
+    radii are within a factor _RADIUS_CLASS of each other are searched together, one tree
+    against the other at their largest radius, then each pair is kept by that test. One query
+    per origin, with a Python list of its points, took 1.9 us an origin at 10,000 a frame and
+    2.9 at 100,000 (their queries in random order miss the cache); this takes about a quarter of
+    that with radii alike. Fewer origins than _ONE_QUERY_EACH_BELOW are queried one by one,
+    which costs less there.
+
+    Example
+    -------
+    >>> pairs_within(np.array([[0.0, 0.0], [10.0, 0.0]]), np.array([1.0, 5.0]), np.array([[0.0, 1.0], [12.0, 0.0], [0.5, 0.0]]))
+    (array([0, 0, 1]), array([0, 2, 1]))
     """
     empty = np.empty(0, np.int64)
     if origins.shape[0] == 0 or points.shape[0] == 0:
         return empty, empty
+    radius = np.broadcast_to(np.asarray(radius, dtype=float), origins.shape[:1])
+    if origins.shape[0] * points.shape[0] <= _ALL_DISTANCES_UP_TO:
+        dx = points[:, 0] - origins[:, 0, None]
+        dy = points[:, 1] - origins[:, 1, None]
+        owner, target = np.nonzero(dx * dx + dy * dy <= (radius * radius)[:, None])
+        return owner.astype(np.int64, copy=False), target.astype(np.int64, copy=False)
     if origins.shape[0] < _ONE_QUERY_EACH_BELOW:
-        found = cKDTree(points).query_ball_point(origins, radius)
+        found = tree_of(points).query_ball_point(origins, radius)
         counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
         return np.repeat(np.arange(len(found)), counts), np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
-    radius = np.broadcast_to(np.asarray(radius, dtype=float), origins.shape[:1])
     reach = np.abs(radius)
     owners, targets = [], []
     everywhere = np.flatnonzero(np.isinf(reach))
@@ -65,7 +136,7 @@ def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) ->
         targets.append(np.tile(np.arange(points.shape[0]), everywhere.size))
     finite = np.flatnonzero(np.isfinite(reach))
     if finite.size:
-        tree = cKDTree(points)
+        tree = tree_of(points)
         size_class = np.floor(np.log(np.maximum(reach[finite], _SMALLEST_RADIUS)) / np.log(_RADIUS_CLASS))
         for label in np.unique(size_class):
             members = finite[size_class == label]
@@ -162,7 +233,7 @@ def first_links(
         # the points nearest to it (exact gating by IM2 alone would reach far for fast links).
         k = min(_CONTINUATIONS, frames[step + 1].shape[0])
         if k and origin.size:
-            _, nearest_next = cKDTree(frames[step + 1]).query(middle + move, k=k)
+            _, nearest_next = tree_of(frames[step + 1]).query(middle + move, k=k)
             point_out = np.asarray(nearest_next).reshape(-1, k).ravel()
         else:
             point_out = np.empty(0, np.int64)
@@ -210,6 +281,6 @@ def _first_candidates(
     k = min(neighbours, second.shape[0])
     if k == 0 or first.shape[0] == 0:
         return np.empty(0, np.int64), np.empty(0, np.int64)
-    _, index = cKDTree(second).query(first, k=k)
+    _, index = tree_of(second).query(first, k=k)
     index = np.asarray(index).reshape(first.shape[0], k)
     return np.repeat(np.arange(first.shape[0]), k), index.ravel()
