@@ -229,9 +229,9 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
     return Candidates(
         head=head,
         measurement=measurement,
-        displacement=points[measurement] - state.last_xy[head] if head.size else np.empty((0, 2)),
+        displacement=points.take(measurement, axis=0) - state.last_xy.take(head, axis=0) if head.size else np.empty((0, 2)),
         gap=gap[head],
-        previous_velocity=state.velocity[head],
+        previous_velocity=state.velocity.take(head, axis=0),
         previous_span=state.span[head],
     )
 
