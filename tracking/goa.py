@@ -422,7 +422,7 @@ def goa_pass(
         Measurement index per track and frame, -1 for a slave or where it does not run. Given
         heads come first, in their order, then tracks in the order they opened.
     """
-    with shared_trees(frames):
+    with shared_trees():
         return _goa_pass(frames, initial, config, progress, start, end, given)
 
 
@@ -452,7 +452,7 @@ def _goa_pass(
             state = heads.state[running]
             # Measurements that given heads hold are theirs.
             index = np.flatnonzero(free[step])
-            # The frame itself where all of it is free, so that its shared tree serves.
+            # The frame itself where all of it is free: no copy to make.
             whole = index.size == frames[step].shape[0]
             taken = assign_step(state, step, frames[step] if whole else frames[step][index], config)
             if not whole:
