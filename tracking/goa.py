@@ -188,17 +188,19 @@ class HeadState:
 
     def advance(self, step: int, measurement: np.ndarray, points: np.ndarray) -> None:
         """Take the measurements (index per head, -1 for a slave) of the frame at ``step``."""
-        held = measurement != UNASSIGNED
-        new_xy = points[measurement[held]]
-        had = held & (self.last_step >= 0)
-        gap = step - self.last_step[had]
-        self.velocity[had] = (points[measurement[had]] - self.last_xy[had]) / gap[:, None]
+        held = np.flatnonzero(measurement != UNASSIGNED)
+        new_xy = points.take(measurement[held], axis=0)
+        before = self.last_step[held]
+        seen = before >= 0
+        had = held[seen]
+        gap = step - before[seen]
+        self.velocity[had] = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
         self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows])
+        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows])
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
         self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span

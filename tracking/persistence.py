@@ -561,12 +561,14 @@ class PersistentModel(IndividualModel, key="persistent"):
         """
         squared, spread, one_frame, gap = self._parts(candidates)
         cost = phi_max * (squared + spread) / self.gate**2
-        if self._decides_joins and (gap > 1).any():
+        back = np.flatnonzero(gap > 1) if self._decides_joins else ()
+        if len(back):
             # A head back from slaves takes a point only where that is likelier than its track
             # having ended and the point being a new object (the measured end chance and start
             # rate), as gap closing decides (:meth:`join_costs`): otherwise a head on slaves took
             # the point of an object that entered 30 px away six frames later (issue 29).
-            cost[(gap > 1) & (self._join_terms(squared, spread, one_frame, gap) > self._new_terms(one_frame))] = np.inf
+            join = self._join_terms(squared[back], spread[back], one_frame[back], gap[back])
+            cost[back[join > self._new_terms(one_frame[back])]] = np.inf
         return cost
 
     @property
