@@ -629,13 +629,15 @@ def goa_updown(
     if len(frames) < 2:
         points = frames[0].shape[0] if frames and start is None else 0
         return tracks_from_assignment(frames, np.arange(points)[:, None].repeat(len(frames), axis=1), first_frame)
-    first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
-    up = goa_pass(frames, first, config, progress, start=start, end=end)
-    if start is None:
-        initial, given = _down_start(frames, up, config), None
-    else:
-        initial, given = _histories(up[:, ::-1], config, end)
-    down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
+    # The down pass starts where the up pass ended: the last frames' trees serve both.
+    with shared_trees():
+        first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
+        up = goa_pass(frames, first, config, progress, start=start, end=end)
+        if start is None:
+            initial, given = _down_start(frames, up, config), None
+        else:
+            initial, given = _histories(up[:, ::-1], config, end)
+        down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
     if gaps is not None:
         down = gaps.fill(frames, down, config)
     # Tracks that open anywhere are listed by where they open.
