@@ -210,24 +210,26 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
     """Gated (head, measurement) pairs for the frame at ``step``, found with KD-trees."""
     alive = np.flatnonzero(state.last_step >= 0)
     has_history = ~np.isnan(state.velocity[:, 0])
-    speed = np.hypot(*np.nan_to_num(state.velocity).T)
+    # A head without a velocity has NaN in both columns: speed 0.
+    speed = np.hypot(*np.where(has_history[:, None], state.velocity, 0.0).T)
     limit = config.speed.reach(config.individual.gate_radius(speed, has_history, config.phi_max))
     gap = step - state.last_step
     heads: list[np.ndarray] = []
     measurements: list[np.ndarray] = []
     if points.shape[0] and alive.size:
-        bounded = alive[np.isfinite(limit[alive])]
+        finite = np.isfinite(limit[alive])
+        bounded = alive[finite]
         if bounded.size:
-            owner, target = pairs_within(state.last_xy[bounded], limit[bounded] * gap[bounded], points)
+            owner, target = pairs_within(state.last_xy.take(bounded, axis=0), limit[bounded] * gap[bounded], points)
             heads.append(bounded[owner])
             measurements.append(target)
-        unbounded = alive[~np.isfinite(limit[alive])]
+        unbounded = alive[~finite]
         if unbounded.size:
-            heads_u, measurements_u = _unbounded_pairs(tree_of(points), state.last_xy[unbounded], points.shape[0], config)
+            heads_u, measurements_u = _unbounded_pairs(tree_of(points), state.last_xy.take(unbounded, axis=0), points.shape[0], config)
             heads.append(unbounded[heads_u])
             measurements.append(measurements_u)
-    head = np.concatenate(heads) if heads else np.empty(0, np.int64)
-    measurement = np.concatenate(measurements) if measurements else np.empty(0, np.int64)
+    head = (heads[0] if len(heads) == 1 else np.concatenate(heads)) if heads else np.empty(0, np.int64)
+    measurement = (measurements[0] if len(measurements) == 1 else np.concatenate(measurements)) if measurements else np.empty(0, np.int64)
     return Candidates(
         head=head,
         measurement=measurement,

@@ -215,7 +215,7 @@ def first_links(
         slave_cost = _SLAVE_SHARE * phi_max
     horizon = min(lookahead, len(frames))
     head, measurement = _first_candidates(frames[0], frames[1], limits.d_max, neighbours)
-    velocity = frames[1][measurement] - frames[0][head]
+    velocity = np.take(frames[1], measurement, axis=0) - np.take(frames[0], head, axis=0)
     valid = limits.admits(velocity)
     head, measurement = head[valid], measurement[valid]
     # A model measured on the data brings its own speed scale, so that a speed limit only
@@ -237,7 +237,8 @@ def first_links(
     points = [np.asarray(f, dtype=float) for f in frames[:horizon]]
     for step in range(1, horizon - 1):
         origin, target = links[-1]
-        start, middle = points[step - 1][origin], points[step][target]
+        # Rows taken by index (fancy indexing of (n, 2) arrays costs several times more).
+        start, middle = points[step - 1].take(origin, axis=0), points[step].take(target, axis=0)
         move = middle - start
         # A smooth continuation lies near the straight-line prediction, so each link looks at
         # the points nearest to it (exact gating by IM2 alone would reach far for fast links).
@@ -249,8 +250,8 @@ def first_links(
             point_out = np.empty(0, np.int64)
         link_in = np.repeat(np.arange(origin.size), k)
         middle_index = target[link_in]
-        next_velocity = frames[step + 1][point_out] - middle[link_in]
-        triplet_cost = smooth_motion_cost(move[link_in], next_velocity, model.w1, model.w2)
+        next_velocity = np.take(frames[step + 1], point_out, axis=0) - middle.take(link_in, axis=0)
+        triplet_cost = smooth_motion_cost(move.take(link_in, axis=0), next_velocity, model.w1, model.w2)
         ok = (triplet_cost <= phi_max) & limits.admits(next_velocity)
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
         # A link into a measured point may go on through a slave (one in a row at most), unless a
@@ -259,7 +260,7 @@ def first_links(
         smooth[link_in[triplet_cost < slave_cost]] = True
         into_measured = np.flatnonzero((target < frames[step].shape[0]) & ~smooth)
         slaves = frames[step + 1].shape[0] + np.arange(into_measured.size)
-        points[step + 1] = np.concatenate((points[step + 1], middle[into_measured] + move[into_measured]))
+        points[step + 1] = np.concatenate((points[step + 1], middle.take(into_measured, axis=0) + move.take(into_measured, axis=0)))
         link_in = np.concatenate((link_in, into_measured))
         point_out = np.concatenate((point_out, slaves))
         middle_index = np.concatenate((middle_index, target[into_measured]))
