@@ -113,7 +113,9 @@ class SpeedLimits:
 
     def admits(self, velocity: np.ndarray) -> np.ndarray:
         """Boolean (P,): the velocities (P, 2), pixels/frame, whose speed is within the limits."""
-        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        return self._admits_speed(_speeds(velocity))
+
+    def _admits_speed(self, speed: np.ndarray) -> np.ndarray:
         ok = speed >= self.d_min * (1 - _ROUNDING)
         if self.d_max is not None:
             ok &= speed <= self.d_max * (1 + _ROUNDING)
@@ -126,10 +128,17 @@ class SpeedLimits:
     def scale(self, velocity: np.ndarray) -> float:
         """Speed that costs phi_max under the IM1 fallback, pixels/frame: d_max, or the fastest
         of the velocities (P, 2) given, at least 1."""
+        return self._scale_of_speeds(None if self.d_max is not None else _speeds(velocity))
+
+    def _scale_of_speeds(self, speed: np.ndarray | None) -> float:
         if self.d_max is not None:
             return float(self.d_max)
-        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
         return max(float(speed.max(initial=0.0)), 1.0)
+
+
+def _speeds(velocity: np.ndarray) -> np.ndarray:
+    """Speed of each velocity (P, 2), pixels/frame."""
+    return np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
 
 
 def nearest_neighbour_cost(candidates: Candidates, scale: float) -> np.ndarray:
@@ -546,10 +555,12 @@ def acceptable_links(
     -------
     Candidates, ndarray of float (P',)
     """
-    admitted = limits.admits(candidates.velocity)
+    # One speed per pair for both the gate and the scale.
+    speed = _speeds(candidates.velocity)
+    admitted = limits._admits_speed(speed)
     if not admitted.all():
-        candidates = candidates.subset(admitted)
-    cost = model.cost(candidates, phi_max, limits.scale(candidates.velocity))
+        candidates, speed = candidates.subset(admitted), speed[admitted]
+    cost = model.cost(candidates, phi_max, limits._scale_of_speeds(speed))
     keep = cost <= phi_max
     return (candidates, cost) if keep.all() else (candidates.subset(keep), cost[keep])
 
