@@ -56,7 +56,7 @@ class _SharedTrees(threading.local):
 
 _SHARED = _SharedTrees()
 # Trees kept at once, and points in them: a pass looks at the frames about its step, so older ones
-# are let go (a million points hold about 60 MB of trees).
+# are let go (a million points' trees are tens of megabytes).
 _TREES_KEPT = 16
 _POINTS_KEPT = 1_000_000
 
@@ -67,8 +67,9 @@ def shared_trees() -> Iterator[None]:
 
     A pass asks for a frame's tree at its step, when it confirms a head back from slaves by the
     next frames, and when it opens tracks among the frames' free points (the same points, in
-    another array, from one step to the next until the pass reaches them): on bulk water 11,102
-    trees a link, a fifth of its time. The trees are let go when the outermost block ends.
+    another array, from one step to the next until the pass reaches them): linking bulk water's
+    detections built 11,102 trees, 2,849 with them shared. The trees are let go when the
+    outermost block ends.
 
     Example
     -------
