@@ -90,7 +90,13 @@ def shared_trees() -> Iterator[None]:
 
 def tree_of(points: np.ndarray) -> cKDTree:
     """The KD-tree of ``points`` (M, 2), pixels: built once for the same points within
-    :func:`shared_trees`."""
+    :func:`shared_trees`, anew outside.
+
+    Example
+    -------
+    >>> int(tree_of(np.array([[0.0, 0.0], [3.0, 4.0]])).query([3.0, 3.0])[1])
+    1
+    """
     if not _SHARED.depth:
         return cKDTree(points)
     key = (points.shape, hash(points.tobytes()))
