@@ -26,7 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .assignment import UNASSIGNED, solve_dense, solve_split
-from .initialisation import first_links, pairs_within
+from .initialisation import first_links, pairs_within, shared_trees, tree_of
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
 from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
@@ -188,17 +188,19 @@ class HeadState:
 
     def advance(self, step: int, measurement: np.ndarray, points: np.ndarray) -> None:
         """Take the measurements (index per head, -1 for a slave) of the frame at ``step``."""
-        held = measurement != UNASSIGNED
-        new_xy = points[measurement[held]]
-        had = held & (self.last_step >= 0)
-        gap = step - self.last_step[had]
-        self.velocity[had] = (points[measurement[had]] - self.last_xy[had]) / gap[:, None]
+        held = np.flatnonzero(measurement != UNASSIGNED)
+        new_xy = points.take(measurement[held], axis=0)
+        before = self.last_step[held]
+        seen = before >= 0
+        had = held[seen]
+        gap = step - before[seen]
+        self.velocity[had] = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
         self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows])
+        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows])
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
         self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span
@@ -208,30 +210,32 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
     """Gated (head, measurement) pairs for the frame at ``step``, found with KD-trees."""
     alive = np.flatnonzero(state.last_step >= 0)
     has_history = ~np.isnan(state.velocity[:, 0])
-    speed = np.hypot(*np.nan_to_num(state.velocity).T)
+    # A head without a velocity has NaN in both columns: speed 0.
+    speed = np.hypot(*np.where(has_history[:, None], state.velocity, 0.0).T)
     limit = config.speed.reach(config.individual.gate_radius(speed, has_history, config.phi_max))
     gap = step - state.last_step
     heads: list[np.ndarray] = []
     measurements: list[np.ndarray] = []
     if points.shape[0] and alive.size:
-        bounded = alive[np.isfinite(limit[alive])]
+        finite = np.isfinite(limit[alive])
+        bounded = alive[finite]
         if bounded.size:
-            owner, target = pairs_within(state.last_xy[bounded], limit[bounded] * gap[bounded], points)
+            owner, target = pairs_within(state.last_xy.take(bounded, axis=0), limit[bounded] * gap[bounded], points)
             heads.append(bounded[owner])
             measurements.append(target)
-        unbounded = alive[~np.isfinite(limit[alive])]
+        unbounded = alive[~finite]
         if unbounded.size:
-            heads_u, measurements_u = _unbounded_pairs(cKDTree(points), state.last_xy[unbounded], points.shape[0], config)
+            heads_u, measurements_u = _unbounded_pairs(tree_of(points), state.last_xy.take(unbounded, axis=0), points.shape[0], config)
             heads.append(unbounded[heads_u])
             measurements.append(measurements_u)
-    head = np.concatenate(heads) if heads else np.empty(0, np.int64)
-    measurement = np.concatenate(measurements) if measurements else np.empty(0, np.int64)
+    head = (heads[0] if len(heads) == 1 else np.concatenate(heads)) if heads else np.empty(0, np.int64)
+    measurement = (measurements[0] if len(measurements) == 1 else np.concatenate(measurements)) if measurements else np.empty(0, np.int64)
     return Candidates(
         head=head,
         measurement=measurement,
-        displacement=points[measurement] - state.last_xy[head] if head.size else np.empty((0, 2)),
+        displacement=points.take(measurement, axis=0) - state.last_xy.take(head, axis=0) if head.size else np.empty((0, 2)),
         gap=gap[head],
-        previous_velocity=state.velocity[head],
+        previous_velocity=state.velocity.take(head, axis=0),
         previous_span=state.span[head],
     )
 
@@ -422,6 +426,19 @@ def goa_pass(
         Measurement index per track and frame, -1 for a slave or where it does not run. Given
         heads come first, in their order, then tracks in the order they opened.
     """
+    with shared_trees():
+        return _goa_pass(frames, initial, config, progress, start, end, given)
+
+
+def _goa_pass(
+    frames: Sequence[np.ndarray],
+    initial: np.ndarray,
+    config: GOAConfig,
+    progress: Progress | None,
+    start: TrackStart | None,
+    end: TrackEnd | None,
+    given: np.ndarray | None,
+) -> np.ndarray:
     n = len(frames)
     initial = np.asarray(initial, dtype=np.int64)
     heads = Heads(n)
@@ -439,9 +456,12 @@ def goa_pass(
             state = heads.state[running]
             # Measurements that given heads hold are theirs.
             index = np.flatnonzero(free[step])
-            taken = assign_step(state, step, frames[step][index], config)
-            held = taken != UNASSIGNED
-            taken[held] = index[taken[held]]
+            # The frame itself where all of it is free: no copy to make.
+            whole = index.size == frames[step].shape[0]
+            taken = assign_step(state, step, frames[step] if whole else frames[step][index], config)
+            if not whole:
+                held = taken != UNASSIGNED
+                taken[held] = index[taken[held]]
             if end is not None:
                 taken = end.confirm_returns(state, step, frames, free, taken, config)
             heads.take(running, state, step, taken, frames[step])
@@ -611,13 +631,15 @@ def goa_updown(
     if len(frames) < 2:
         points = frames[0].shape[0] if frames and start is None else 0
         return tracks_from_assignment(frames, np.arange(points)[:, None].repeat(len(frames), axis=1), first_frame)
-    first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
-    up = goa_pass(frames, first, config, progress, start=start, end=end)
-    if start is None:
-        initial, given = _down_start(frames, up, config), None
-    else:
-        initial, given = _histories(up[:, ::-1], config, end)
-    down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
+    # The down pass starts where the up pass ended: the last frames' trees serve both.
+    with shared_trees():
+        first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
+        up = goa_pass(frames, first, config, progress, start=start, end=end)
+        if start is None:
+            initial, given = _down_start(frames, up, config), None
+        else:
+            initial, given = _histories(up[:, ::-1], config, end)
+        down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
     if gaps is not None:
         down = gaps.fill(frames, down, config)
     # Tracks that open anywhere are listed by where they open.

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Iterable
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -518,17 +519,27 @@ def _predicted(about: np.ndarray, gap: np.ndarray, span: np.ndarray, persistence
     Each mean is turned by half a turn per frame it spans beyond one (its length is kept, so no
     prediction is longer than ``persistence`` times the velocity), then carried over the gap:
     the mean over k = 1..g of (persistence e^(i turn))^k."""
+    return _predictions(about, gap, span, persistence, (turn,))[0]
+
+
+def _predictions(about: np.ndarray, gap: np.ndarray, span: np.ndarray, persistence: float, turns: Iterable[float]) -> list[np.ndarray]:
+    """:func:`_predicted` for each of ``turns`` (radians), the gap and span looked up once."""
     if about.shape[0] == 0:
-        return about
+        return [about for _ in turns]
     # The (gap, span) pairs as one number each, looked up in a table of the few present: np.unique
     # over rows cost more than the rest of the prediction.
     wide = span.max() + 1
     key = gap * wide + span
     present = np.flatnonzero(np.bincount(key))
-    table = np.empty(present[-1] + 1, complex)
-    table[present] = [_carried(persistence, turn, g, m) for g, m in zip(present // wide, present % wide)]
-    turned = (about[:, 0] + 1j * about[:, 1]) * table[key]
-    return np.column_stack((turned.real, turned.imag))
+    complex_about = about[:, 0] + 1j * about[:, 1]
+    predictions = []
+    for turn in turns:
+        table = np.empty(present[-1] + 1, complex)
+        table[present] = [_carried(persistence, turn, g, m) for g, m in zip(present // wide, present % wide)]
+        # Times a whole array, not a scalar: numpy's loops for the two round differently.
+        turned = complex_about * table[key]
+        predictions.append(np.column_stack((turned.real, turned.imag)))
+    return predictions
 
 
 @functools.lru_cache(maxsize=1024)
@@ -609,12 +620,14 @@ class PersistentModel(IndividualModel, key="persistent"):
         """
         squared, spread, one_frame, gap = self._parts(candidates)
         cost = phi_max * (squared + spread) / self.gate**2
-        if self._decides_joins and (gap > 1).any():
+        back = np.flatnonzero(gap > 1) if self._decides_joins else ()
+        if len(back):
             # A head back from slaves takes a point only where that is likelier than its track
             # having ended and the point being a new object (the measured end chance and start
             # rate), as gap closing decides (:meth:`join_costs`): otherwise a head on slaves took
             # the point of an object that entered 30 px away six frames later (issue 29).
-            cost[(gap > 1) & (self._join_terms(squared, spread, one_frame, gap) > self._new_terms(one_frame))] = np.inf
+            join = self._join_terms(squared[back], spread[back], one_frame[back], gap[back])
+            cost[back[join > self._new_terms(one_frame[back])]] = np.inf
         return cost
 
     @property
@@ -634,12 +647,15 @@ class PersistentModel(IndividualModel, key="persistent"):
         gap = candidates.gap.astype(float)
         growth = s.gap_growth(gap)
         variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
-        squared = np.full(known.shape, np.inf)
         span = np.ones(gap.shape, np.int64) if candidates.previous_span is None else candidates.previous_span
         moved = candidates.velocity - drift
-        for turn in {s.turn, -s.turn}:
-            residual = moved - _predicted(about, candidates.gap, span, s.persistence, turn)
-            squared = np.minimum(squared, np.einsum("ij,ij->i", residual, residual))
+        squared = None
+        for prediction in _predictions(about, candidates.gap, span, s.persistence, {s.turn, -s.turn}):
+            residual = moved - prediction
+            residual = np.einsum("ij,ij->i", residual, residual)
+            squared = residual if squared is None else np.minimum(squared, residual)
+        if squared is None:
+            squared = np.full(known.shape, np.inf)
         # The measurement is a position: its density across a gap is spread over the g^2 growth
         # times larger variance of the displacement, which a link over one frame does not pay
         # (twice the log of that ratio, in units of the squared distance). Without it a head back
