@@ -74,8 +74,7 @@ def add_chain_moments(moments: np.ndarray, rows: np.ndarray, before: np.ndarray,
 def fit_states(chains: Chains, scene: MotionStatistics) -> tuple[tuple[MotionStatistics, ...], tuple[float, ...]]:
     """Motion states of a scene and the share of chains in each, fitted to ``chains`` by EM.
 
-    Each state is ``scene`` with its own persistence (the scene's turn kept), noise and relative
-    noise; the number of states (1 to ``MOST_STATES``) is the one of least BIC. One state is
+    Each state is ``scene`` with its own persistence, turn, noise and relative noise; the number of states (1 to ``MOST_STATES``) is the one of least BIC. One state is
     ``scene`` itself.
 
     Parameters
@@ -100,35 +99,45 @@ def fit_states(chains: Chains, scene: MotionStatistics) -> tuple[tuple[MotionSta
     step = max(chains.before.shape[0] // MOST_CHAINS, 1)
     before, after = chains.before[::step], chains.after[::step]
     floor = max(_MIN_NOISE, chains.resolution / np.sqrt(2.0), np.sqrt(6.0) * chains.localisation)
-    turned = _turned(before, scene.turn)
     speed2 = np.einsum("ij,ij->i", before, before)
     wrong = _WRONG_SPREAD**2 * max(chains.spread, floor) ** 2
     wrong_log = -np.einsum("ij,ij->i", after, after) / (2.0 * wrong) - np.log(2.0 * np.pi * wrong)
-    # Ranked by how well the scene's fit explains them: the first guess of who is in which state.
-    change = after - scene.persistence * turned
-    ratio = np.einsum("ij,ij->i", change, change) / (scene.noise**2 + scene.relative**2 * speed2)
-    rank = np.argsort(np.argsort(ratio, kind="stable"), kind="stable") / max(ratio.size, 1)
+    # First guesses of who is in which state: chains ranked by how well the scene's fit explains
+    # them (states of one persistence and different noise), and by how much of its velocity
+    # each keeps (states of different persistence: one guess alone ended between them, fitting
+    # smooth, random and reversing chains with persistence 0.7, -0.1 and -0.7).
+    change = after - scene.persistence * _turned(before, scene.turn)
+    ranks = [_rank(np.einsum("ij,ij->i", change, change) / (scene.noise**2 + scene.relative**2 * speed2))]
+    ranks.append(_rank(np.einsum("ij,ij->i", before, after) / np.maximum(speed2, 1e-12)))
     best, best_bic = None, np.inf
     for count in range(1, MOST_STATES + 1):
-        fitted = _em(turned, after, speed2, wrong_log, np.minimum((rank * count).astype(int), count - 1), count, floor)
-        if fitted is None:
-            continue
-        params, shares, loglik = fitted
-        bic = -2.0 * loglik + (4 * count) * np.log(ratio.size)
-        if bic < best_bic:
-            best, best_bic = (params, shares), bic
+        for rank in ranks[: 1 if count == 1 else None]:
+            fitted = _em(before, after, speed2, wrong_log, np.minimum((rank * count).astype(int), count - 1), count, floor)
+            if fitted is None:
+                continue
+            params, shares, loglik = fitted
+            bic = -2.0 * loglik + (4 * count) * np.log(after.shape[0])
+            if bic < best_bic:
+                best, best_bic = (params, shares), bic
     if best is None or len(best[0]) == 1:
         return (scene,), (1.0,)
     params, shares = best
-    states = tuple(replace(scene, persistence=p, noise=max(n, floor), relative=r, along=None, across=None) for p, n, r in params)
+    states = tuple(replace(scene, persistence=p, turn=t, noise=max(n, floor), relative=r, along=None, across=None) for p, t, n, r in params)
     total = float(np.sum(shares))
     return states, tuple(float(w) / total for w in shares)
 
 
-def _em(turned: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np.ndarray, group: np.ndarray, count: int, floor: float):
-    """EM for ``count`` states from a first split ``group`` of the chains; (persistence, noise,
-    relative) per state, their shares and the log-likelihood, or None when a state falls
+def _rank(values: np.ndarray) -> np.ndarray:
+    """Each value's rank among them, as a share in [0, 1)."""
+    return np.argsort(np.argsort(values, kind="stable"), kind="stable") / max(values.size, 1)
+
+
+def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np.ndarray, group: np.ndarray, count: int, floor: float):
+    """EM for ``count`` states from a first split ``group`` of the chains; (persistence, turn,
+    noise, relative) per state, their shares and the log-likelihood, or None when a state falls
     below ``LEAST_SHARE``."""
+    dot = np.einsum("ij,ij->i", before, after)
+    cross = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
     resp = np.zeros((after.shape[0], count + 1))
     resp[np.arange(after.shape[0]), group] = 1.0
     previous = -np.inf
@@ -139,12 +148,18 @@ def _em(turned: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
             total = w.sum()
             if total <= 0:
                 return None
-            persistence = float(np.clip(np.dot(w, np.einsum("ij,ij->i", turned, after)) / max(np.dot(w, speed2), 1e-12), -1.0, 1.0))
-            change = after - persistence * turned
+            # Each state's own turn, as the scene's is fitted (fit_chains): a random walk's
+            # turn is noise, and the scene's, measured mostly on walkers, turned smooth movers.
+            norm = max(np.dot(w, speed2), 1e-12)
+            along, across = float(np.dot(w, dot)) / norm, float(np.dot(w, cross)) / norm
+            persistence, turn = min(float(np.hypot(along, across)), 1.0), float(np.arctan2(across, along))
+            if along <= 0:
+                persistence, turn = max(along, -1.0), 0.0
+            change = after - persistence * _turned(before, turn)
             squared = np.einsum("ij,ij->i", change, change) / 2.0
             noise2, relative2 = _weighted_fit(speed2, squared, w)
             variance = np.maximum(noise2 + relative2 * speed2, floor**2)
-            params.append((persistence, float(np.sqrt(max(noise2, floor**2))), float(np.sqrt(relative2))))
+            params.append((persistence, turn, float(np.sqrt(max(noise2, floor**2))), float(np.sqrt(relative2))))
             logs.append(np.log(total / w.size + 1e-300) - squared / variance - np.log(2.0 * np.pi * variance))
         wrong_share = max(resp[:, count].mean(), 1e-6)
         logs.append(np.log(wrong_share) + wrong_log)
