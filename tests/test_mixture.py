@@ -3,6 +3,8 @@ to a scene, each head's chances, the link cost, and a mixed scene tracked with t
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -36,22 +38,47 @@ def test_moments_fade_and_skip_pairs_that_are_not_chains():
     assert moments[0] == pytest.approx([1.0 + MEMORY, MEMORY + 4.0, 4.0, 2.0 * MEMORY, 4.0 * MEMORY + 4.0])
 
 
+def _chains(paths: np.ndarray) -> Chains:
+    """The three-frame chains of velocity sequences (tracks x frames x 2), track after track."""
+    return Chains(paths[:, :-1].reshape(-1, 2), paths[:, 1:].reshape(-1, 2), np.zeros(2), float(np.std(paths)))
+
+
+def _smooth(rng, n: int) -> np.ndarray:
+    return rng.normal(0.0, 3.0, (n, 1, 2)) + rng.normal(0.0, 0.2, (n, 8, 2))
+
+
 def test_one_kind_of_motion_is_one_state_the_scene_fit():
-    rng = np.random.default_rng(3)
-    velocity = rng.normal(0.0, 3.0, (2000, 2))
-    chains = Chains(velocity, velocity + rng.normal(0.0, 0.2, velocity.shape), np.zeros(2), 3.0)
+    chains = _chains(_smooth(np.random.default_rng(3), 300))
     scene = fit_chains(chains)
     assert fit_states(chains, scene) == ((scene,), (1.0,))
 
 
 def test_smooth_movers_walkers_and_reversers_are_three_states():
     rng = np.random.default_rng(4)
-    velocity = rng.normal(0.0, 3.0, (3, 700, 2))
-    after = np.stack((velocity[0], rng.normal(0.0, 2.0, (700, 2)), -velocity[2])) + rng.normal(0.0, 0.2, velocity.shape)
-    chains = Chains(velocity.reshape(-1, 2), after.reshape(-1, 2), np.zeros(2), 3.0)
+    reversing = rng.normal(0.0, 3.0, (100, 1, 2)) * (-1.0) ** np.arange(8)[None, :, None] + rng.normal(0.0, 0.2, (100, 8, 2))
+    chains = _chains(np.concatenate((_smooth(rng, 100), rng.normal(0.0, 2.0, (100, 8, 2)), reversing)))
     states, shares = fit_states(chains, fit_chains(chains))
     assert sorted(round(s.persistence, 1) for s in states) == [-1.0, 0.0, 1.0]
     assert shares == pytest.approx([1 / 3] * 3, abs=0.03)
+
+
+def test_states_that_come_and_go_within_tracks_are_one():
+    # Smooth movers whose velocity is redrawn now and then (run and tumble): two kinds of
+    # velocity change, but every track has both.
+    rng = np.random.default_rng(6)
+    runs = np.cumsum(rng.random((300, 8)) < 0.2, axis=1)
+    paths = rng.normal(0.0, 3.0, (300, 9, 2))[np.arange(300)[:, None], runs] + rng.normal(0.0, 0.2, (300, 8, 2))
+    chains = _chains(paths)
+    assert len(fit_states(chains, fit_chains(chains))[0]) == 1
+
+
+def test_a_state_as_wide_as_the_spacing_is_no_state():
+    rng = np.random.default_rng(4)
+    paths = np.concatenate((_smooth(rng, 100), rng.normal(0.0, 2.0, (100, 8, 2))))
+    sparse = replace(_chains(paths), density=1.0 / 40.0**2)
+    assert len(fit_states(sparse, fit_chains(sparse))[0]) == 2
+    crowded = replace(sparse, density=1.0 / 4.0**2)
+    assert len(fit_states(crowded, fit_chains(crowded))[0]) == 1
 
 
 def test_a_head_is_judged_by_its_own_history():

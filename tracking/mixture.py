@@ -36,9 +36,20 @@ MEMORY = 0.9
 MOST_STATES = 3
 # States holding less than this share of the chains are not kept (a few chains fit anything).
 LEAST_SHARE = 0.05
-# Chains the fit uses at most, evenly spaced over all of them: EM's cost grows with the chains
-# and its estimates do not improve beyond this many.
-MOST_CHAINS = 50_000
+# States are kept only where tracks keep them: a track's next chain is in the state of its last
+# at least this much more often than chance would have it (Cohen's kappa; 0 for states that
+# come and go from chain to chain, as turns of run-and-tumble motion or a heavy tail of smooth
+# motion do, 1 for each track in a state of its own). Chosen on tuning seeds 0-1 of
+# bench_mixed.py's tables: scenes of mixed kinds 0.30 to 0.79, one kind 0.28 at most (tumbles
+# 0.19 to 0.26, a swarm 0.03 to 0.28, oscillators, walkers abreast and relays below 0).
+STICKY = 0.3
+# Largest noise of a state, per axis, in units of the mean spacing of the points (one over the
+# square root of their density); chosen on tuning seeds 0-1 (see fit_states).
+WIDEST = 0.35
+# Pairs of chains (one and the next) the fit uses at most, evenly spaced over all of them: EM's
+# cost grows with the chains (200,000 chains: 13 s of CPU with 50,000 pairs, 0.3 s with 5,000)
+# and a few thousand pin three states' persistence and noise to a few hundredths.
+MOST_CHAINS = 5_000
 _ITERATIONS = 60
 # The broad component of wrong links: a velocity drawn from this many times the spread of all
 # velocities (per axis), whatever the velocity before it.
@@ -87,17 +98,22 @@ def fit_states(chains: Chains, scene: MotionStatistics) -> tuple[tuple[MotionSta
     Example
     -------
     >>> rng = np.random.default_rng(0)
-    >>> smooth = np.repeat(rng.normal(0, 3, (400, 2)), 2, axis=0).reshape(400, 2, 2) + rng.normal(0, 0.1, (400, 2, 2))
-    >>> walk = rng.normal(0, 2, (400, 2, 2))
-    >>> both = np.concatenate((smooth, walk))
+    >>> smooth = rng.normal(0, 3, (200, 1, 2)) + rng.normal(0, 0.1, (200, 8, 2))
+    >>> paths = np.concatenate((smooth, rng.normal(0, 2, (200, 8, 2))))  # tracks x frames x velocity
     >>> from seedtrack.tracking.persistence import fit_chains
-    >>> chains = Chains(both[:, 0], both[:, 1], np.zeros(2), 2.5)
+    >>> chains = Chains(paths[:, :-1].reshape(-1, 2), paths[:, 1:].reshape(-1, 2), np.zeros(2), 2.5)
     >>> states, shares = fit_states(chains, fit_chains(chains))
     >>> sorted(round(s.persistence, 1) for s in states), [round(w, 1) for w in shares]
     ([0.0, 1.0], [0.5, 0.5])
     """
-    step = max(chains.before.shape[0] // MOST_CHAINS, 1)
-    before, after = chains.before[::step], chains.after[::step]
+    # Evenly spaced chains, each with the one after it: that one continues the same track where
+    # its first velocity is this one's second (the same two points, the same bits).
+    total = chains.before.shape[0]
+    index = np.arange(0, total, max(total // MOST_CHAINS, 1))
+    index = np.union1d(index, np.minimum(index + 1, total - 1))
+    before, after = chains.before[index], chains.after[index]
+    follows = np.zeros(index.size, bool)
+    follows[1:] = (index[1:] == index[:-1] + 1) & (after[:-1] == before[1:]).all(axis=1)
     floor = max(_MIN_NOISE, chains.resolution / np.sqrt(2.0), np.sqrt(6.0) * chains.localisation)
     speed2 = np.einsum("ij,ij->i", before, before)
     wrong = _WRONG_SPREAD**2 * max(chains.spread, floor) ** 2
@@ -115,13 +131,23 @@ def fit_states(chains: Chains, scene: MotionStatistics) -> tuple[tuple[MotionSta
             fitted = _em(before, after, speed2, wrong_log, np.minimum((rank * count).astype(int), count - 1), count, floor)
             if fitted is None:
                 continue
-            params, shares, loglik = fitted
+            params, shares, loglik, resp = fitted
             bic = -2.0 * loglik + (4 * count) * np.log(after.shape[0])
             if bic < best_bic:
-                best, best_bic = (params, shares), bic
+                best, best_bic = (params, shares, resp), bic
     if best is None or len(best[0]) == 1:
         return (scene,), (1.0,)
-    params, shares = best
+    params, shares, resp = best
+    if _stickiness(resp, follows) < STICKY:
+        return (scene,), (1.0,)
+    if chains.density:
+        # A state whose noise is a good part of the spacing between points is no motion a
+        # tracker could follow: its chains are wrong links that chain (a first pass's on a dish
+        # 15% missed: 0.48 of the spacing; walkers of the mixed scenes 0.13 to 0.22).
+        kept = [k for k, p in enumerate(params) if p[2] * np.sqrt(chains.density) <= WIDEST]
+        if len(kept) < 2:
+            return (scene,), (1.0,)
+        params, shares = [params[k] for k in kept], shares[kept]
     states = tuple(replace(scene, persistence=p, turn=t, noise=max(n, floor), relative=r, along=None, across=None) for p, t, n, r in params)
     total = float(np.sum(shares))
     return states, tuple(float(w) / total for w in shares)
@@ -173,7 +199,19 @@ def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
     shares = resp[:, :count].mean(axis=0)
     if shares.min() < LEAST_SHARE:
         return None
-    return params, shares, loglik
+    return params, shares, loglik, resp[:, :count]
+
+
+def _stickiness(resp: np.ndarray, follows: np.ndarray) -> float:
+    """How much more often a track's next chain is in the same state than chance would put it
+    there: 0 when states come and go from chain to chain, 1 when each track keeps its own."""
+    state = np.eye(resp.shape[1])[resp.argmax(axis=1)]
+    now, then = state[1:][follows[1:]], state[:-1][follows[1:]]
+    if not now.shape[0]:
+        return 0.0
+    agree = float(np.mean(np.einsum("ij,ij->i", now, then)))
+    chance = float(np.dot(now.mean(axis=0), then.mean(axis=0)))
+    return (agree - chance) / max(1.0 - chance, 1e-12)
 
 
 def _weighted_fit(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float]:
