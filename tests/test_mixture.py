@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from seedtrack.data.mixed_motion import MixedSpec, generate_mixed
-from seedtrack.tracking.goa import GOAConfig
+from seedtrack.tracking.goa import GOAConfig, HeadState
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.mixture import MEMORY, MixtureModel, add_chain_moments, fit_states, state_chances
@@ -147,3 +147,11 @@ def test_smooth_movers_among_walkers_are_tracked_better_per_track():
     assert "motion states per track" in fit.measured
     assert per_track.link_error < scene.link_error
     assert per_track.correct_tracks > scene.correct_tracks
+
+
+def test_heads_keep_the_moments_of_consecutive_links_only():
+    frames = [np.array([[2.0 * k, 0.0]]) for k in range(6)]
+    # Held in frames 0-2, a slave in 3, held again in 4 and 5.
+    state = HeadState.from_history(frames, np.array([[0, 0, 0, -1, 0, 0]]), 0, 5)
+    # Frames 0-1-2 make one chain; 2-(3)-4 spans a gap and 2-4-5 follows one: neither counts.
+    assert state.moments[0].tolist() == [1.0, 4.0, 4.0, 0.0, 4.0]

@@ -162,8 +162,10 @@ def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
     """EM for ``count`` states from a first split ``group`` of the chains; (persistence, turn,
     noise, relative) per state, their shares and the log-likelihood, or None when a state falls
     below ``LEAST_SHARE``."""
+    # A state's squared change |a - p R(turn) b|^2 from these, without turning every chain.
     dot = np.einsum("ij,ij->i", before, after)
     cross = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
+    after2 = np.einsum("ij,ij->i", after, after)
     resp = np.zeros((after.shape[0], count + 1))
     resp[np.arange(after.shape[0]), group] = 1.0
     previous = -np.inf
@@ -181,8 +183,8 @@ def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
             persistence, turn = min(float(np.hypot(along, across)), 1.0), float(np.arctan2(across, along))
             if along <= 0:
                 persistence, turn = max(along, -1.0), 0.0
-            change = after - persistence * _turned(before, turn)
-            squared = np.einsum("ij,ij->i", change, change) / 2.0
+            along_turned = np.cos(turn) * dot + np.sin(turn) * cross
+            squared = np.maximum(after2 - 2.0 * persistence * along_turned + persistence**2 * speed2, 0.0) / 2.0
             noise2, relative2 = _weighted_fit(speed2, squared, w)
             variance = np.maximum(noise2 + relative2 * speed2, floor**2)
             params.append((persistence, turn, float(np.sqrt(max(noise2, floor**2))), float(np.sqrt(relative2))))
@@ -190,7 +192,8 @@ def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
         wrong_share = max(resp[:, count].mean(), 1e-6)
         logs.append(np.log(wrong_share) + wrong_log)
         logs = np.column_stack(logs)
-        norm = logsumexp(logs, axis=1)
+        top = logs.max(axis=1)
+        norm = top + np.log(np.exp(logs - top[:, None]).sum(axis=1))
         resp = np.exp(logs - norm[:, None])
         loglik = float(norm.sum())
         if loglik - previous < 1e-6 * after.shape[0]:
@@ -215,14 +218,15 @@ def _stickiness(resp: np.ndarray, follows: np.ndarray) -> float:
 
 
 def _weighted_fit(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float]:
-    """Weighted least-squares c0, c1 >= 0 of y = c0 + c1 x."""
-    sw = np.sqrt(w)
-    design = np.column_stack((sw, sw * x))
-    c0, c1 = np.linalg.lstsq(design, sw * y, rcond=None)[0]
+    """Weighted least-squares c0, c1 >= 0 of y = c0 + c1 x (the normal equations: two unknowns)."""
+    sw, swx, swy = w.sum(), np.dot(w, x), np.dot(w, y)
+    swxx, swxy = np.dot(w * x, x), np.dot(w * x, y)
+    det = sw * swxx - swx * swx
+    c0, c1 = ((swxx * swy - swx * swxy) / det, (sw * swxy - swx * swy) / det) if det > 1e-12 * max(sw * swxx, 1e-300) else (-1.0, -1.0)
     if c1 < 0:
-        return float(max(np.dot(w, y) / max(w.sum(), 1e-12), 0.0)), 0.0
+        return float(max(swy / max(sw, 1e-12), 0.0)), 0.0
     if c0 < 0:
-        return 0.0, float(max(np.dot(w * x, y) / max(np.dot(w * x, x), 1e-12), 0.0))
+        return 0.0, float(max(swxy / max(swxx, 1e-12), 0.0))
     return float(c0), float(c1)
 
 
