@@ -28,6 +28,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links, pairs_within, shared_trees, tree_of
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
+from .mixture import add_chain_moments
 from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
@@ -37,6 +38,7 @@ Progress = Callable[[int], None]
 SOLVERS: dict[str, Callable[..., np.ndarray]] = {"split": solve_split, "dense": solve_dense}
 # Weight of the false-track/slave block, in units of the unmatched weight (see GOAConfig.corner).
 _CORNERS = {"phi": 1.0, "zero": 0.0}
+_MOTION_STATES = {"scene": None, "track": None}
 # Frames that score the first links: "im1" the first link alone, "lookahead" config.lookahead.
 _FIRST_LINK_FRAMES = {"im1": 2, "lookahead": None}
 
@@ -107,6 +109,11 @@ class GOAConfig:
         Localisation error of the positions, pixels per axis (standard deviation; 0 when not
         known). The measured motion model's noise never falls below what it puts on a velocity
         change (sqrt(6) times it), nor below what positions on a grid can hold.
+    motion_states : {"scene", "track"}
+        For the measured motion model: one persistence and noise for the whole scene
+        ("scene", :class:`~seedtrack.tracking.persistence.PersistentModel`), or motion states
+        fitted to the scene and each track's own state judged from its history ("track",
+        :class:`~seedtrack.tracking.mixture.MixtureModel`).
     """
 
     individual: IndividualModel = field(default_factory=IndividualModel)
@@ -121,6 +128,7 @@ class GOAConfig:
     restart_lost: bool = True
     solver: str = "split"
     localisation_error: float = 0.0
+    motion_states: str = "scene"
 
     def __post_init__(self) -> None:
         check_limit("phi_max", self.phi_max, optional=False)
@@ -134,6 +142,7 @@ class GOAConfig:
         if self.neighbours < 1:
             raise ValueError(f"neighbours must be at least 1, got {self.neighbours}")
         _check_choice("solver", self.solver, SOLVERS)
+        _check_choice("motion_states", self.motion_states, _MOTION_STATES)
         if not np.isfinite(self.localisation_error) or self.localisation_error < 0:
             raise ValueError(f"localisation_error must be a non-negative number of pixels, got {self.localisation_error}")
 
@@ -166,16 +175,22 @@ class HeadState:
     span : ndarray of int, shape (m,), optional
         Frames between those two measurements (1 unless the head held slaves between them);
         all 1 when not given.
+    moments : ndarray of float, shape (m, 5), optional
+        Each head's own history of velocity changes, for per-track motion states
+        (:func:`seedtrack.tracking.mixture.add_chain_moments`); zeros when not given.
     """
 
     last_xy: np.ndarray
     last_step: np.ndarray
     velocity: np.ndarray
     span: np.ndarray | None = None
+    moments: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.span is None:
             self.span = np.ones(self.last_step.shape[0], dtype=np.int64)
+        if self.moments is None:
+            self.moments = np.zeros((self.last_step.shape[0], 5))
 
     @classmethod
     def from_history(cls, frames: Sequence[np.ndarray], assignment: np.ndarray, start: int, until: int) -> "HeadState":
@@ -194,16 +209,19 @@ class HeadState:
         seen = before >= 0
         had = held[seen]
         gap = step - before[seen]
-        self.velocity[had] = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
+        velocity = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
+        add_chain_moments(self.moments, had, self.velocity.take(had, axis=0), velocity, (gap == 1) & (self.span[had] == 1))
+        self.velocity[had] = velocity
         self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows])
+        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows], self.moments.take(rows, axis=0))
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
         self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span
+        self.moments[rows] = other.moments
 
 
 def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConfig) -> Candidates:
@@ -237,6 +255,7 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
         gap=gap[head],
         previous_velocity=state.velocity.take(head, axis=0),
         previous_span=state.span[head],
+        history=state.moments[head],
     )
 
 
@@ -286,7 +305,7 @@ class Heads:
         self.count = 0
         self._buffers = (
             np.empty((0, n_steps), dtype=np.int64),  # assignment
-            np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, np.int64),  # state
+            np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 5)),  # state
             np.empty(0, np.int64),  # consecutive slaves up to the latest step
             np.empty(0, bool),  # running
             np.empty(0, np.int64),  # first step each head is associated at
@@ -294,9 +313,9 @@ class Heads:
         self._views()
 
     def _views(self) -> None:
-        assignment, last_xy, last_step, velocity, span, self.slaves, self.running, self.joins = (b[: self.count] for b in self._buffers)
+        assignment, last_xy, last_step, velocity, span, moments, self.slaves, self.running, self.joins = (b[: self.count] for b in self._buffers)
         self.assignment = assignment
-        self.state = HeadState(last_xy, last_step, velocity, span)
+        self.state = HeadState(last_xy, last_step, velocity, span, moments)
 
     def add(self, frames: Sequence[np.ndarray], rows: np.ndarray, start: int, until: int | np.ndarray) -> None:
         """Add heads whose measurements of steps ``start..until`` (one step, or one per head)
@@ -312,7 +331,7 @@ class Heads:
                 larger[:low] = buffer[:low]
                 grown.append(larger)
             self._buffers = tuple(grown)
-        added = (rows, state.last_xy, state.last_step, state.velocity, state.span, until - state.last_step, True, until + 1)
+        added = (rows, state.last_xy, state.last_step, state.velocity, state.span, state.moments, until - state.last_step, True, until + 1)
         for buffer, values in zip(self._buffers, added):
             buffer[low:high] = values
         self.count = high

@@ -41,6 +41,9 @@ class Candidates:
     previous_span : ndarray of int, shape (P,), optional
         Frames between those two measurements (the previous velocity is gap-normalised over
         them); all 1 when not given.
+    history : ndarray of float, shape (P, 5), optional
+        The head's own history of velocity changes
+        (:func:`seedtrack.tracking.mixture.add_chain_moments`); None when not kept.
     """
 
     head: np.ndarray
@@ -49,6 +52,7 @@ class Candidates:
     gap: np.ndarray
     previous_velocity: np.ndarray
     previous_span: np.ndarray | None = None
+    history: np.ndarray | None = None
 
     @functools.cached_property
     def velocity(self) -> np.ndarray:
@@ -74,6 +78,7 @@ class Candidates:
             gap=self.gap[keep],
             previous_velocity=self.previous_velocity.take(keep, axis=0),
             previous_span=None if self.previous_span is None else self.previous_span[keep],
+            history=None if self.history is None else self.history[keep],
         )
         if "velocity" in self.__dict__:
             velocity = self.velocity.take(keep, axis=0)
