@@ -89,6 +89,7 @@ def main() -> None:
     print(f"GOA-updown, d_max {args.max_speed}, {FRAMES} frames, {BASE.trajectories} points per {BASE.size:g}^2 px, "
           f"speed {BASE.mean_speed:g} px/frame; medians of {args.repeats} runs; one core")
     print(f"{'points':>7} {'up s/frame':>11} {'down s/frame':>13} {'first links s':>14} {'total s':>8} {'trackpy s':>10} {'ours/trackpy':>13}")
+    time_trackpy(scene(100, seed=1), 2 * BASE.mean_speed)  # numba compiles trackpy's code on its first call
     per_step, rows, exponents = [], [], []
     for n in args.sizes:
         frames = scene(n)
