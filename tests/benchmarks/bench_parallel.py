@@ -1,7 +1,8 @@
 """Cores and memory of ``seedtrack run``: how much of two cores it uses, and whether a long clip
 runs in the memory of a short one.
 
-Run as ``python tests/benchmarks/bench_parallel.py [--quick]``. Prints, for a generated 300-frame
+Run as ``python tests/benchmarks/bench_parallel.py [--quick] [--write-docs]`` (``--write-docs`` also
+writes the tables into docs/batch.md, stamped: ``run-cores``, ``run-memory``). Prints, for a generated 300-frame
 640x512 dish clip:
 
 - ``run``'s CPU time over its wall time, with ``--workers 1`` and with the default (every core);
@@ -39,6 +40,7 @@ from pathlib import Path
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
 from seedtrack.parallel import default_workers
+from tables import write_table
 
 _PR_SET_CHILD_SUBREAPER = 36
 
@@ -103,6 +105,7 @@ def main() -> None:
     parser.add_argument("--memory-only", action="store_true", help="skip the 300-frame clip (cores and frames/s)")
     parser.add_argument("--repeats", type=int, default=1, metavar="N", help="runs of the 300-frame clip per number of workers, and peak memory measurements per long clip (default 1)")
     parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of one run with 2 workers")
+    parser.add_argument("--write-docs", action="store_true", help="write the tables into docs/batch.md, stamped")
     args = parser.parse_args()
     become_subreaper()
     with tempfile.TemporaryDirectory() as folder:
@@ -111,35 +114,45 @@ def main() -> None:
             phases(folder)
             return
         if not args.memory_only:
-            cores(folder, args.repeats)
-        long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+            header, rows, same = cores(folder, args.repeats)
+            if args.write_docs:
+                write_table("batch.md", "run-cores", header, rows, note=same)
+        header, rows = long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+        if args.write_docs:
+            write_table("batch.md", "run-memory", header, rows)
 
 
-def cores(folder: Path, repeats: int) -> None:
+def cores(folder: Path, repeats: int) -> tuple[list[str], list[list[str]], str]:
     """CPU over wall time and frames/s of ``run`` on a 300-frame 640x512 clip, ``repeats`` turns
-    of each number of workers."""
+    of each number of workers: the table's header and rows, and whether the files were the same."""
     clip = folder / "dish" / "clip.mp4"
     write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
     counts = ("1", str(default_workers()))
     decode = min(decode_seconds(clip) for _ in range(2))
     print(f"300 frames, 640x512, 80 seeds; {default_workers()} cores usable; load average {os.getloadavg()[0]:.1f}")
     print(f"decoding alone: {300 / decode:.0f} frames/s")
-    print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's | load average |")
+    header = ["workers", "wall, s", "CPU, s", "CPU / wall", "frames/s", f"of decoding's ({300 / decode:.0f} frames/s)", "load average"]
+    print("| " + " | ".join(header) + " |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
-    rows = {workers: [] for workers in counts}
+    rows, table = {workers: [] for workers in counts}, []
     for _ in range(repeats):
         for workers in counts:
             load = os.getloadavg()[0]
             wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
             rows[workers].append((wall, cpu))
-            print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} | {load:.1f} |")
+            table.append([workers, f"{wall:.1f}", f"{cpu:.1f}", f"{cpu / wall:.2f}", f"{300 / wall:.0f}", f"{decode / wall:.0%}", f"{load:.1f}"])
+            print("| " + " | ".join(table[-1]) + " |")
     if repeats > 1:
         for workers in counts:
             walls, cpus = zip(*rows[workers])
             ratios = [cpu / wall for wall, cpu in rows[workers]]
-            print(f"| {workers}, median of {repeats} | {statistics.median(walls):.1f} | {statistics.median(cpus):.1f} | {statistics.median(ratios):.2f} ({min(ratios):.2f} to {max(ratios):.2f}) | {300 / statistics.median(walls):.0f} | {decode / statistics.median(walls):.0%} | |")
+            table.append([f"{workers}, median of {repeats}", f"{statistics.median(walls):.1f}", f"{statistics.median(cpus):.1f}", f"{statistics.median(ratios):.2f} ({min(ratios):.2f} to {max(ratios):.2f})",
+                          f"{300 / statistics.median(walls):.0f}", f"{decode / statistics.median(walls):.0%}", ""])
+            print("| " + " | ".join(table[-1]) + " |")
     same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
-    print(f"files identical for 1 and {default_workers()} workers: {same}")
+    said = f"files identical for 1 and {default_workers()} workers: {same}"
+    print(said)
+    return header, table, said[:1].upper() + said[1:] + "."
 
 
 _PHASES = """
@@ -242,9 +255,10 @@ def phases(folder: Path) -> None:
     print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
 
 
-def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
+def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> tuple[list[str], list[list[str]]]:
     """Peak memory of ``run`` on 6-seed clips of each length, ``repeats`` times (one run of each
-    length after the other, so that a ratio compares runs made under the same load)."""
+    length after the other, so that a ratio compares runs made under the same load): the table's
+    header and rows, the medians, the last with the ratio to the first (goal at most 1.2)."""
     clips = {}
     for frames in lengths:
         clips[frames] = folder / f"long{frames}" / "clip.mp4"
@@ -262,6 +276,10 @@ def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
         medians = ", ".join(f"{frames:,} frames {statistics.median(peaks[frames]) / 1024:.0f} MB" for frames in lengths)
         ratio = f"; ratio {statistics.median(ratios):.2f} x (of {min(ratios):.2f} to {max(ratios):.2f})" if ratios else ""
         print(f"median of {repeats}: {medians}{ratio}")
+    rows = [[f"{frames:,}", f"{statistics.median(peaks[frames]) / 1024:.0f}"] for frames in lengths]
+    if ratios:
+        rows[-1][1] += f" (ratio {statistics.median(ratios):.2f} x, {min(ratios):.2f} to {max(ratios):.2f} over {repeats}; goal 1.2)"
+    return ["frames, 128x128, 6 seeds", f"peak, MB (median of {repeats})"], rows
 
 
 if __name__ == "__main__":
