@@ -100,7 +100,7 @@ def main() -> None:
     parser.add_argument("--speed-only", action="store_true", help="skip the long clips (peak memory)")
     parser.add_argument("--repeats", type=int, default=1, metavar="N", help="runs of the 300-frame clip per number of workers, and peak memory measurements per long clip (default 1)")
     parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of runs with 1 and 2 workers")
-    parser.add_argument("--write-docs", action="store_true", help="write the speed table (with --phases: the least wall times) into docs/batch.md, stamped")
+    parser.add_argument("--write-docs", action="store_true", help="write the speed and memory tables (with --phases: the least wall times) into docs/batch.md, stamped")
     args = parser.parse_args()
     become_subreaper()
     with tempfile.TemporaryDirectory() as folder:
@@ -111,7 +111,9 @@ def main() -> None:
         if not args.memory_only:
             cores(folder, args.repeats, args.write_docs)
         if not args.speed_only:
-            long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+            header, rows = long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+            if args.write_docs and not args.quick:  # the table is the ratio of the long clip to the short
+                write_table("batch.md", "run-memory", header, rows)
 
 
 # Decoding the clip alone, as a whole process, as `run` decodes it (imports included).
@@ -276,9 +278,10 @@ def phases(folder: Path, repeats: int, write_docs: bool = False) -> None:
         write_table("batch.md", "run-phases", PHASES_HEADER, rows)
 
 
-def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
+def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> tuple[list[str], list[list[str]]]:
     """Peak memory of ``run`` on 6-seed clips of each length, ``repeats`` times (one run of each
-    length after the other, so that a ratio compares runs made under the same load)."""
+    length after the other, so that a ratio compares runs made under the same load): the table's
+    header and rows, the medians, the last with the ratio to the first (goal at most 1.2)."""
     clips = {}
     for frames in lengths:
         clips[frames] = folder / f"long{frames}" / "clip.mp4"
@@ -296,6 +299,10 @@ def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
         medians = ", ".join(f"{frames:,} frames {statistics.median(peaks[frames]) / 1024:.0f} MB" for frames in lengths)
         ratio = f"; ratio {statistics.median(ratios):.2f} x (of {min(ratios):.2f} to {max(ratios):.2f})" if ratios else ""
         print(f"median of {repeats}: {medians}{ratio}")
+    rows = [[f"{frames:,}", f"{statistics.median(peaks[frames]) / 1024:.0f}"] for frames in lengths]
+    if ratios:
+        rows[-1][1] += f" (ratio {statistics.median(ratios):.2f} x, {min(ratios):.2f} to {max(ratios):.2f} over {repeats}; goal 1.2)"
+    return ["frames, 128x128, 6 seeds", f"peak, MB (median of {repeats})"], rows
 
 
 if __name__ == "__main__":
