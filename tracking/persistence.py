@@ -731,24 +731,56 @@ class PersistentModel(IndividualModel, key="persistent"):
         new -= 2.0 * np.log(s.ended) + 2.0 * np.log(s.started)
         return join - new
 
+    def within_gate(self, candidates: Candidates) -> np.ndarray:
+        """Boolean per candidate: its cost (:meth:`cost`) within the gate, the misses of a gap
+        charged as :meth:`join_costs` charges them: no more than the measured returns say
+        where objects are seen to come back after that many frames, and a head back from
+        slaves vetoed as :meth:`cost` vetoes it.
+
+        Example
+        -------
+        A seed hidden for 5 frames where nothing else is ever missed: beyond the gate on
+        independent misses, within it where the runs showed such returns.
+
+        >>> stats = MotionStatistics(1.0, 0.5, 0.0, (0.0, 0.0), 2.0, 100, missed=4e-4, ended=4e-4, started=2e-7)
+        >>> pairs = Candidates(np.array([0]), np.array([0]), np.array([[18.0, 0.5]]), np.array([6]), np.array([[3.0, 0.0]]))
+        >>> back = MotionStatistics(1.0, 0.5, 0.0, (0.0, 0.0), 2.0, 100, missed=4e-4, ended=4e-4, started=2e-7, returns=(0.0, 0.0, 0.0, 0.0, 0.9))
+        >>> PersistentModel(stats, gate=9.0).within_gate(pairs).tolist(), PersistentModel(back, gate=9.0).within_gate(pairs).tolist()
+        ([False], [True])
+        """
+        squared, spread, one_frame, gap = self._parts(candidates)
+        inside = squared + spread - self._returned(gap) <= self.gate**2
+        back = np.flatnonzero(inside & (gap > 1)) if self._decides_joins else ()
+        if len(back):
+            # The veto of :meth:`cost` too: a join no likelier than an end and a new start.
+            inside[back] = self._join_terms(squared[back], spread[back], one_frame[back], gap[back]) <= self._new_terms(one_frame[back])
+        return inside
+
     def _join_terms(self, squared: np.ndarray, spread: np.ndarray, one_frame: np.ndarray, gap: np.ndarray) -> np.ndarray:
         """Twice the negative log-likelihood that a track end continues to a point ``gap`` frames
         later (squared sigmas, the gap's spread and miss terms of :meth:`cost`), its track not
         ending in between."""
         s = self.statistics
         join = _tail(squared) + spread + 2.0 * np.log(2.0 * np.pi * one_frame) - 2.0 * gap * np.log1p(-s.ended)
-        if not s.returns:
-            return join
-        # Where the runs show objects coming back near where they were lost, a join across g
-        # frames is weighed by that measured return (a run ending: a track's end or a miss)
-        # when it is likelier than g - 1 independent misses (bulk water: beads drift out of
-        # focus for several frames; weighed on independent misses, 0.05 ** 5 against an end,
-        # tracks of a bead were cut at every such gap).
+        return join - self._returned(gap)
+
+    def _returned(self, gap: np.ndarray) -> np.ndarray:
+        """What the measured returns take off the charge of ``gap - 1`` independent misses
+        (twice the negative log-likelihood; 0 where none were measured).
+
+        Where the runs show objects coming back near where they were lost, a join across g
+        frames is weighed by that measured return (a run ending: a track's end or a miss)
+        when it is likelier than g - 1 independent misses (bulk water: beads drift out of
+        focus for several frames; weighed on independent misses, 0.05 ** 5 against an end,
+        tracks of a bead were cut at every such gap)."""
+        s = self.statistics
+        if not s.returns or s.missed is None or s.ended is None:
+            return np.zeros(np.shape(gap))
         index = np.clip(gap.astype(np.int64) - 2, 0, len(s.returns) - 1)
         back = np.where((gap >= 2) & (gap <= len(s.returns) + 1), np.asarray(s.returns)[index], 0.0)
         independent = -2.0 * (gap - 1.0) * np.log(s.missed) - 2.0 * gap * np.log1p(-s.ended)
         measured = -2.0 * np.log(np.maximum(back * (s.ended + (1.0 - s.ended) * s.missed), 1e-300))
-        return join - np.maximum(independent - measured, 0.0)
+        return np.maximum(independent - measured, 0.0)
 
     def _new_terms(self, one_frame: np.ndarray) -> np.ndarray:
         """The same for the track ending and the point being a new object, its next step drawn
