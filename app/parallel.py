@@ -178,6 +178,8 @@ class VideoEncoder:
         1: encode in this process, in :meth:`write`; more: in a process of its own.
     preset : str
         x264 preset (:func:`~seedtrack.data.video.write_video`).
+    crf : int
+        x264 constant rate factor, 0 to 51.
 
     Example
     -------
@@ -188,12 +190,12 @@ class VideoEncoder:
     3
     """
 
-    def __init__(self, path, fps: float, workers: int, preset: str = "veryfast") -> None:
-        self.path, self.fps, self.preset = path, fps, preset
+    def __init__(self, path, fps: float, workers: int, preset: str = "veryfast", crf: int = 16) -> None:
+        self.path, self.fps, self.preset, self.crf = path, fps, preset, crf
         self._encoder = self._ours = None
         if workers > 1 and can_start_processes():
             self._ours, theirs = multiprocessing.Pipe()
-            self._encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps, preset), daemon=True)
+            self._encoder = process_context().Process(target=_encode_received, args=(theirs, os.fspath(path), fps, preset, crf), daemon=True)
             with _ctrl_c_held():
                 self._encoder.start()
             theirs.close()
@@ -234,7 +236,7 @@ class VideoEncoder:
             raised as it is, and no file is left behind.
         """
         if self._encoder is None:
-            return write_video(self.path, frames, self.fps, progress=progress, preset=self.preset)
+            return write_video(self.path, frames, self.fps, crf=self.crf, progress=progress, preset=self.preset)
         ours = self._ours
         tick = progress.update if hasattr(progress, "update") else progress
         try:
@@ -260,7 +262,7 @@ class VideoEncoder:
         return value
 
 
-def _encode_received(connection, path: str, fps: float, preset: str) -> None:
+def _encode_received(connection, path: str, fps: float, preset: str, crf: int) -> None:
     """Encoder process: write the frames that arrive on ``connection``, answer with the count
     or the error."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
@@ -271,7 +273,7 @@ def _encode_received(connection, path: str, fps: float, preset: str) -> None:
             yield np.frombuffer(connection.recv_bytes(), dtype=dtype).reshape(shape)
 
     try:
-        answer = ("done", write_video(path, received(), fps, preset=preset))
+        answer = ("done", write_video(path, received(), fps, crf=crf, preset=preset))
     except EOFError:
         return  # the parent gave up; write_video has removed its temporary file
     except Exception as error:

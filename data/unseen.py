@@ -87,7 +87,13 @@ def generate_unseen(spec: UnseenSpec) -> tuple[list[np.ndarray], Tracks]:
     paths = paths + rng.normal(0.0, spec.noise, paths.shape)
     if spec.kind == "whole_pixel":
         paths = np.round(paths)
-    inside = ((paths >= 0) & (paths <= spec.size)).all(axis=2)
+    return observed(rng, paths, spec.size)
+
+
+def observed(rng: np.random.Generator, paths: np.ndarray, size: float) -> tuple[list[np.ndarray], Tracks]:
+    """The frames and truth of objects on ``paths`` (objects x frames x 2, pixels) seen in a
+    square view of side ``size``: each frame's points in random order, NaN where out of view."""
+    inside = ((paths >= 0) & (paths <= size)).all(axis=2)
     paths = paths[inside.any(axis=1)]
     inside = inside[inside.any(axis=1)]
     measurement = np.full(inside.shape, NO_MEASUREMENT, dtype=np.int64)
@@ -179,4 +185,4 @@ def _relay(rng: np.random.Generator, spec: UnseenSpec) -> np.ndarray:
 
 _KINDS = {"oscillate": _oscillate, "tumble": _tumble, "side_by_side": _side_by_side, "swarm": _swarm, "whole_pixel": _whole_pixel, "relay": _relay}
 
-__all__ = ["UnseenSpec", "generate_unseen"]
+__all__ = ["UnseenSpec", "generate_unseen", "observed"]

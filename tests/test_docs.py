@@ -115,8 +115,9 @@ def test_a_benchmark_table_replaces_only_its_own_block(tmp_path):
     assert re.search(r" on \d+ cores, .+, Python 3\.\d+.*, \d{4}-\d\d-\d\d \d\d:\d\d UTC\.\n\n", block)
     assert block.endswith("| points | CPU s |\n| --- | --- |\n| 100 | 0.07 |\n| 1000 | a\\|b |\n")
     assert "old a" not in text and text.startswith("# Speed\n\n<!-- table: a -->\n") and text.endswith("text between\n\n<!-- table: b -->\nold b\n<!-- /table: b -->\nend\n")
-    tables.write_table(page, "a", ["points"], [[5]], command="again")
+    tables.write_table(page, "a", ["points"], [[5]], command="again", note="Slope: 1.04.")
     assert text.split("<!-- /table: a -->")[1] == page.read_text().split("<!-- /table: a -->")[1]
+    assert "| 5 |\n\nSlope: 1.04.\n<!-- /table: a -->" in page.read_text()
     assert page.read_text().count("<!-- table: a -->") == 1 and "| 100 |" not in page.read_text()
     with pytest.raises(ValueError, match="table: c"):
         tables.write_table(page, "c", ["x"], [[1]], command="x")

@@ -146,6 +146,8 @@ def test_values_run_a_subset_of_the_sweep_on_the_same_data(tmp_path, capsys):
     chosen = read_table(tmp_path / "one" / "density-self.csv", required=("trajectories", "seed"))
     assert set(chosen["trajectories"]) == {8}
     np.testing.assert_array_equal(chosen["track_error"], every["track_error"][every["trajectories"] == 8])
+    # The sweeps above print timed progress lines when they run long (stderr is no terminal here).
+    capsys.readouterr()
     assert main(["experiment", "density", "--out", str(tmp_path), "--runs", "1", "--tiny", "--values", "7"]) == 2
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "--values 7 not swept" in error

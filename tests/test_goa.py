@@ -170,16 +170,17 @@ def test_given_heads_keep_their_columns_and_the_others_are_associated_around_the
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed):
+@pytest.mark.parametrize("n", [15, 300, 1500])
+def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed, n):
     # Integer positions and radii put points exactly on the circles (3-4-5 steps): the exact
     # test must keep them as query_ball_point does; radii of several sizes and infinite ones
-    # go through the classes and the all-points path.
+    # go through the classes and the all-points path. 15 origins are tested against every
+    # point, 300 queried one by one, 1500 searched by radius class.
     from scipy.spatial import cKDTree
 
     from seedtrack.tracking.initialisation import pairs_within
 
     rng = np.random.default_rng(seed)
-    n = 1500  # above the count below which each origin is queried alone
     origins = rng.integers(0, 80, (n, 2)).astype(float)
     points = rng.integers(0, 80, (400, 2)).astype(float)
     radius = rng.integers(0, 12, n).astype(float)
@@ -188,3 +189,23 @@ def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed):
     owner, target = pairs_within(origins, radius, points)
     np.testing.assert_array_equal(owner, np.repeat(np.arange(n), [len(f) for f in found]))
     np.testing.assert_array_equal(target, np.concatenate([np.asarray(f, dtype=np.int64) for f in found]))
+
+
+def test_shared_trees_serve_the_same_points_only_and_are_let_go():
+    from seedtrack.tracking import initialisation
+    from seedtrack.tracking.initialisation import shared_trees, tree_of
+
+    rng = np.random.default_rng(3)
+    frames = [rng.uniform(0, 100, (50, 2)) for _ in range(20)]
+    with shared_trees():
+        first = tree_of(frames[0])
+        with shared_trees():
+            assert tree_of(frames[0].copy()) is first
+        # Same shape, other points: a tree of its own points.
+        other = tree_of(frames[1])
+        assert other is not first and np.array_equal(other.data, frames[1])
+        for frame in frames:
+            tree_of(frame)
+        assert len(initialisation._SHARED.trees) <= initialisation._TREES_KEPT
+    assert not initialisation._SHARED.trees
+    assert tree_of(frames[0]) is not tree_of(frames[0])

@@ -1,6 +1,7 @@
 """Work over frames in several threads: the same results, in the same order, as one."""
 
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -86,6 +87,54 @@ def test_run_gives_the_same_bytes_with_one_two_and_three_workers(tmp_path):
     for name in ("detections.csv", "tracks.csv", "overlay.mp4"):
         for workers in ("2", "3"):
             assert (tmp_path / "1" / name).read_bytes() == (tmp_path / workers / name).read_bytes(), (name, workers)
+
+
+class _Counted:
+    """A frame source that counts the frames taken from it."""
+
+    def __init__(self, source):
+        self.source, self.taken = source, 0
+
+    def __getattr__(self, name):
+        return getattr(self.source, name)
+
+    def __enter__(self):
+        self.source.__enter__()
+        return self
+
+    def __exit__(self, *exc_info):
+        return self.source.__exit__(*exc_info)
+
+    def __iter__(self):
+        for item in self.source:
+            self.taken += 1
+            yield item
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_with_two_workers_the_overlays_frames_decode_while_tracking_runs(tmp_path, monkeypatch, workers):
+    # With one, a few wait decoded, so that memory does not grow with the clip.
+    from seedtrack import pipeline
+
+    write_dish_clip(DishSpec(seeds=20, frames=40, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
+    sources, seen = [], []
+    opened, track = pipeline.open_frames, pipeline.track_frames
+
+    def counted(*args, **kwargs):
+        sources.append(_Counted(opened(*args, **kwargs)))
+        return sources[-1]
+
+    def tracking(*args, **kwargs):
+        deadline = time.monotonic() + (10 if workers > 1 else 0.3)
+        while sources[-1].taken < 40 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        seen.append(sources[-1].taken)
+        return track(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "open_frames", counted)
+    monkeypatch.setattr(pipeline, "track_frames", tracking)
+    pipeline.run_pipeline(tmp_path / "clip" / "clip.mp4", tmp_path / "out", workers=workers)
+    assert seen == [40] if workers > 1 else 0 < seen[0] <= 5
 
 
 def test_workers_below_one_is_refused(tmp_path, capsys):

@@ -262,16 +262,21 @@ def join_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, config
     # Both moves, into the bridge and out of it, are scored on the bridges' scale.
     scale = config.speed.scale(bridge.velocity)
     leaving = Candidates(end, start, start_velocity[start], np.ones_like(gap), bridge.velocity)
-    into = config.individual.cost(bridge, config.phi_max, scale)
-    out = config.individual.cost(leaving, config.phi_max, scale)
-    valid = (into <= config.phi_max) & (out <= config.phi_max)
-    # A bridge through a point another track holds is no miss: the object was seen there.
-    valid[valid] = ~_through_held(lambda k: frames[k][assignment[:, k][assignment[:, k] != UNASSIGNED]], last[end[valid]], end_xy[end[valid]], start_xy[start[valid]], gap[valid])
     odds = config.individual.join_costs(bridge, leaving) if hasattr(config.individual, "join_costs") else None
-    if odds is not None:
+    if odds is None:
+        into = config.individual.cost(bridge, config.phi_max, scale)
+        out = config.individual.cost(leaving, config.phi_max, scale)
+        valid = (into <= config.phi_max) & (out <= config.phi_max)
+    else:
         # A measured model weighs each join against the end and the start being two objects,
         # within its gate: a join is made when it is the likelier, the likeliest set together.
-        valid &= odds < 0
+        # The gate holds the motion alone: the misses are weighed in the odds, and in the cost
+        # as well they put every seed hidden for 5 frames on a turning dish beyond the gate
+        # (the miss chance of seeds missed nowhere else is Laplace's 1 / points).
+        valid = config.individual.within_gate(bridge) & config.individual.within_gate(leaving) & (odds < 0)
+    # A bridge through a point another track holds is no miss: the object was seen there.
+    valid[valid] = ~_through_held(lambda k: frames[k][assignment[:, k][assignment[:, k] != UNASSIGNED]], last[end[valid]], end_xy[end[valid]], start_xy[start[valid]], gap[valid])
+    if odds is not None:
         end, start, weight = end[valid], start[valid], odds[valid]
         unmatched = -float(weight.min(initial=0.0)) / 2
         weight = weight + 2 * unmatched

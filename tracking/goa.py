@@ -26,8 +26,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .assignment import UNASSIGNED, solve_dense, solve_split
-from .initialisation import first_links, pairs_within
+from .initialisation import first_links, pairs_within, shared_trees, tree_of
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
+from .mixture import add_chain_moments
 from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
@@ -37,6 +38,7 @@ Progress = Callable[[int], None]
 SOLVERS: dict[str, Callable[..., np.ndarray]] = {"split": solve_split, "dense": solve_dense}
 # Weight of the false-track/slave block, in units of the unmatched weight (see GOAConfig.corner).
 _CORNERS = {"phi": 1.0, "zero": 0.0}
+_MOTION_STATES = {"scene": None, "track": None}
 # Frames that score the first links: "im1" the first link alone, "lookahead" config.lookahead.
 _FIRST_LINK_FRAMES = {"im1": 2, "lookahead": None}
 
@@ -107,6 +109,11 @@ class GOAConfig:
         Localisation error of the positions, pixels per axis (standard deviation; 0 when not
         known). The measured motion model's noise never falls below what it puts on a velocity
         change (sqrt(6) times it), nor below what positions on a grid can hold.
+    motion_states : {"scene", "track"}
+        For the measured motion model: one persistence and noise for the whole scene
+        ("scene", :class:`~seedtrack.tracking.persistence.PersistentModel`), or motion states
+        fitted to the scene and each track's own state judged from its history ("track",
+        :class:`~seedtrack.tracking.mixture.MixtureModel`).
     """
 
     individual: IndividualModel = field(default_factory=IndividualModel)
@@ -121,6 +128,7 @@ class GOAConfig:
     restart_lost: bool = True
     solver: str = "split"
     localisation_error: float = 0.0
+    motion_states: str = "scene"
 
     def __post_init__(self) -> None:
         check_limit("phi_max", self.phi_max, optional=False)
@@ -134,6 +142,7 @@ class GOAConfig:
         if self.neighbours < 1:
             raise ValueError(f"neighbours must be at least 1, got {self.neighbours}")
         _check_choice("solver", self.solver, SOLVERS)
+        _check_choice("motion_states", self.motion_states, _MOTION_STATES)
         if not np.isfinite(self.localisation_error) or self.localisation_error < 0:
             raise ValueError(f"localisation_error must be a non-negative number of pixels, got {self.localisation_error}")
 
@@ -166,16 +175,22 @@ class HeadState:
     span : ndarray of int, shape (m,), optional
         Frames between those two measurements (1 unless the head held slaves between them);
         all 1 when not given.
+    moments : ndarray of float, shape (m, 5), optional
+        Each head's own history of velocity changes, for per-track motion states
+        (:func:`seedtrack.tracking.mixture.add_chain_moments`); zeros when not given.
     """
 
     last_xy: np.ndarray
     last_step: np.ndarray
     velocity: np.ndarray
     span: np.ndarray | None = None
+    moments: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.span is None:
             self.span = np.ones(self.last_step.shape[0], dtype=np.int64)
+        if self.moments is None:
+            self.moments = np.zeros((self.last_step.shape[0], 5))
 
     @classmethod
     def from_history(cls, frames: Sequence[np.ndarray], assignment: np.ndarray, start: int, until: int) -> "HeadState":
@@ -188,51 +203,59 @@ class HeadState:
 
     def advance(self, step: int, measurement: np.ndarray, points: np.ndarray) -> None:
         """Take the measurements (index per head, -1 for a slave) of the frame at ``step``."""
-        held = measurement != UNASSIGNED
-        new_xy = points[measurement[held]]
-        had = held & (self.last_step >= 0)
-        gap = step - self.last_step[had]
-        self.velocity[had] = (points[measurement[had]] - self.last_xy[had]) / gap[:, None]
+        held = np.flatnonzero(measurement != UNASSIGNED)
+        new_xy = points.take(measurement[held], axis=0)
+        before = self.last_step[held]
+        seen = before >= 0
+        had = held[seen]
+        gap = step - before[seen]
+        velocity = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
+        add_chain_moments(self.moments, had, self.velocity.take(had, axis=0), velocity, (gap == 1) & (self.span[had] == 1))
+        self.velocity[had] = velocity
         self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows])
+        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows], self.moments.take(rows, axis=0))
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
         self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span
+        self.moments[rows] = other.moments
 
 
 def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConfig) -> Candidates:
     """Gated (head, measurement) pairs for the frame at ``step``, found with KD-trees."""
     alive = np.flatnonzero(state.last_step >= 0)
     has_history = ~np.isnan(state.velocity[:, 0])
-    speed = np.hypot(*np.nan_to_num(state.velocity).T)
+    # A head without a velocity has NaN in both columns: speed 0.
+    speed = np.hypot(*np.where(has_history[:, None], state.velocity, 0.0).T)
     limit = config.speed.reach(config.individual.gate_radius(speed, has_history, config.phi_max))
     gap = step - state.last_step
     heads: list[np.ndarray] = []
     measurements: list[np.ndarray] = []
     if points.shape[0] and alive.size:
-        bounded = alive[np.isfinite(limit[alive])]
+        finite = np.isfinite(limit[alive])
+        bounded = alive[finite]
         if bounded.size:
-            owner, target = pairs_within(state.last_xy[bounded], limit[bounded] * gap[bounded], points)
+            owner, target = pairs_within(state.last_xy.take(bounded, axis=0), limit[bounded] * gap[bounded], points)
             heads.append(bounded[owner])
             measurements.append(target)
-        unbounded = alive[~np.isfinite(limit[alive])]
+        unbounded = alive[~finite]
         if unbounded.size:
-            heads_u, measurements_u = _unbounded_pairs(cKDTree(points), state.last_xy[unbounded], points.shape[0], config)
+            heads_u, measurements_u = _unbounded_pairs(tree_of(points), state.last_xy.take(unbounded, axis=0), points.shape[0], config)
             heads.append(unbounded[heads_u])
             measurements.append(measurements_u)
-    head = np.concatenate(heads) if heads else np.empty(0, np.int64)
-    measurement = np.concatenate(measurements) if measurements else np.empty(0, np.int64)
+    head = (heads[0] if len(heads) == 1 else np.concatenate(heads)) if heads else np.empty(0, np.int64)
+    measurement = (measurements[0] if len(measurements) == 1 else np.concatenate(measurements)) if measurements else np.empty(0, np.int64)
     return Candidates(
         head=head,
         measurement=measurement,
-        displacement=points[measurement] - state.last_xy[head] if head.size else np.empty((0, 2)),
+        displacement=points.take(measurement, axis=0) - state.last_xy.take(head, axis=0) if head.size else np.empty((0, 2)),
         gap=gap[head],
-        previous_velocity=state.velocity[head],
+        previous_velocity=state.velocity.take(head, axis=0),
         previous_span=state.span[head],
+        history=state.moments[head],
     )
 
 
@@ -282,7 +305,7 @@ class Heads:
         self.count = 0
         self._buffers = (
             np.empty((0, n_steps), dtype=np.int64),  # assignment
-            np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, np.int64),  # state
+            np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 5)),  # state
             np.empty(0, np.int64),  # consecutive slaves up to the latest step
             np.empty(0, bool),  # running
             np.empty(0, np.int64),  # first step each head is associated at
@@ -290,9 +313,9 @@ class Heads:
         self._views()
 
     def _views(self) -> None:
-        assignment, last_xy, last_step, velocity, span, self.slaves, self.running, self.joins = (b[: self.count] for b in self._buffers)
+        assignment, last_xy, last_step, velocity, span, moments, self.slaves, self.running, self.joins = (b[: self.count] for b in self._buffers)
         self.assignment = assignment
-        self.state = HeadState(last_xy, last_step, velocity, span)
+        self.state = HeadState(last_xy, last_step, velocity, span, moments)
 
     def add(self, frames: Sequence[np.ndarray], rows: np.ndarray, start: int, until: int | np.ndarray) -> None:
         """Add heads whose measurements of steps ``start..until`` (one step, or one per head)
@@ -308,7 +331,7 @@ class Heads:
                 larger[:low] = buffer[:low]
                 grown.append(larger)
             self._buffers = tuple(grown)
-        added = (rows, state.last_xy, state.last_step, state.velocity, state.span, until - state.last_step, True, until + 1)
+        added = (rows, state.last_xy, state.last_step, state.velocity, state.span, state.moments, until - state.last_step, True, until + 1)
         for buffer, values in zip(self._buffers, added):
             buffer[low:high] = values
         self.count = high
@@ -422,6 +445,19 @@ def goa_pass(
         Measurement index per track and frame, -1 for a slave or where it does not run. Given
         heads come first, in their order, then tracks in the order they opened.
     """
+    with shared_trees():
+        return _goa_pass(frames, initial, config, progress, start, end, given)
+
+
+def _goa_pass(
+    frames: Sequence[np.ndarray],
+    initial: np.ndarray,
+    config: GOAConfig,
+    progress: Progress | None,
+    start: TrackStart | None,
+    end: TrackEnd | None,
+    given: np.ndarray | None,
+) -> np.ndarray:
     n = len(frames)
     initial = np.asarray(initial, dtype=np.int64)
     heads = Heads(n)
@@ -439,9 +475,12 @@ def goa_pass(
             state = heads.state[running]
             # Measurements that given heads hold are theirs.
             index = np.flatnonzero(free[step])
-            taken = assign_step(state, step, frames[step][index], config)
-            held = taken != UNASSIGNED
-            taken[held] = index[taken[held]]
+            # The frame itself where all of it is free: no copy to make.
+            whole = index.size == frames[step].shape[0]
+            taken = assign_step(state, step, frames[step] if whole else frames[step][index], config)
+            if not whole:
+                held = taken != UNASSIGNED
+                taken[held] = index[taken[held]]
             if end is not None:
                 taken = end.confirm_returns(state, step, frames, free, taken, config)
             heads.take(running, state, step, taken, frames[step])
@@ -611,13 +650,15 @@ def goa_updown(
     if len(frames) < 2:
         points = frames[0].shape[0] if frames and start is None else 0
         return tracks_from_assignment(frames, np.arange(points)[:, None].repeat(len(frames), axis=1), first_frame)
-    first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
-    up = goa_pass(frames, first, config, progress, start=start, end=end)
-    if start is None:
-        initial, given = _down_start(frames, up, config), None
-    else:
-        initial, given = _histories(up[:, ::-1], config, end)
-    down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
+    # The down pass starts where the up pass ended: the last frames' trees serve both.
+    with shared_trees():
+        first = _initial_links(frames, config) if start is None else np.empty((0, 2), np.int64)
+        up = goa_pass(frames, first, config, progress, start=start, end=end)
+        if start is None:
+            initial, given = _down_start(frames, up, config), None
+        else:
+            initial, given = _histories(up[:, ::-1], config, end)
+        down = goa_pass(frames[::-1], initial, config, progress, start=start, end=end, given=given)[:, ::-1]
     if gaps is not None:
         down = gaps.fill(frames, down, config)
     # Tracks that open anywhere are listed by where they open.

@@ -10,8 +10,11 @@ continuation for one frame by chance, but hardly for several in a row.
 
 from __future__ import annotations
 
+import collections
+import contextlib
 import itertools
-from typing import Sequence
+import threading
+from typing import Iterator, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -35,28 +38,113 @@ _RADIUS_CLASS = 1.5
 # Below this many origins pairs_within asks one query per origin: a few trees cost more than the
 # queries (100 origins: 0.06 ms against 0.17; equal about 1,200).
 _ONE_QUERY_EACH_BELOW = 1000
+# Up to this many (origin, point) distances pairs_within measures them all: a tree of a frame's
+# points costs more than that (555 points: 60 us to build against 20 us for 10 origins' distances;
+# a head back from slaves is checked against whole frames this way at most steps).
+_ALL_DISTANCES_UP_TO = 8192
 _SMALLEST_RADIUS = 1e-300
+
+
+class _SharedTrees(threading.local):
+    """The KD-trees built within :func:`shared_trees` blocks of this thread, by content."""
+
+    def __init__(self) -> None:
+        self.depth = 0
+        self.trees: collections.OrderedDict[tuple, cKDTree] = collections.OrderedDict()
+        self.points = 0
+
+
+_SHARED = _SharedTrees()
+# Trees kept at once, and points in them: a pass looks at the frames about its step, so older ones
+# are let go (a million points' trees are tens of megabytes).
+_TREES_KEPT = 16
+_POINTS_KEPT = 1_000_000
+
+
+@contextlib.contextmanager
+def shared_trees() -> Iterator[None]:
+    """Within the block, :func:`tree_of` builds one KD-tree for the same points, asked again.
+
+    A pass asks for a frame's tree at its step, when it confirms a head back from slaves by the
+    next frames, and when it opens tracks among the frames' free points (the same points, in
+    another array, from one step to the next until the pass reaches them): linking bulk water's
+    detections built 11,102 trees, 2,849 with them shared. The trees are let go when the
+    outermost block ends.
+
+    Example
+    -------
+    >>> frame = np.arange(6.0).reshape(3, 2)
+    >>> with shared_trees():
+    ...     tree_of(frame) is tree_of(frame.copy())
+    True
+    """
+    _SHARED.depth += 1
+    try:
+        yield
+    finally:
+        _SHARED.depth -= 1
+        if not _SHARED.depth:
+            _SHARED.trees.clear()
+            _SHARED.points = 0
+
+
+def tree_of(points: np.ndarray) -> cKDTree:
+    """The KD-tree of ``points`` (M, 2), pixels: built once for the same points within
+    :func:`shared_trees`, anew outside.
+
+    Example
+    -------
+    >>> int(tree_of(np.array([[0.0, 0.0], [3.0, 4.0]])).query([3.0, 3.0])[1])
+    1
+    """
+    if not _SHARED.depth:
+        return cKDTree(points)
+    key = (points.shape, hash(points.tobytes()))
+    tree = _SHARED.trees.get(key)
+    if tree is not None and np.array_equal(tree.data, points):
+        _SHARED.trees.move_to_end(key)
+        return tree
+    tree = cKDTree(points)
+    if key in _SHARED.trees:
+        _SHARED.points -= _SHARED.trees.pop(key).n
+    _SHARED.trees[key] = tree
+    _SHARED.points += tree.n
+    while len(_SHARED.trees) > _TREES_KEPT or (_SHARED.points > _POINTS_KEPT and len(_SHARED.trees) > 1):
+        _SHARED.points -= _SHARED.trees.popitem(last=False)[1].n
+    return tree
 
 
 def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All (origin, point) index pairs with the point within the origin's radius (pixels),
     ordered by origin, then by point: the pairs of cKDTree.query_ball_point, found faster.
 
-    Origins whose radii are within a factor _RADIUS_CLASS of each other are searched together,
-    one tree against the other at their largest radius, then each pair is kept by the test
-    query_ball_point makes (squared distance at most the squared radius). One query per origin,
-    with a Python list of its points, took 1.9 us an origin at 10,000 a frame and 2.9 at 100,000
-    (their queries in random order miss the cache); this takes about a quarter of that with radii
-    alike. Fewer origins than _ONE_QUERY_EACH_BELOW are queried one by one, which costs less there.
+    A point is within when its squared distance is at most the squared radius, the test
+    query_ball_point makes. Few origins and points are tested all against all. Origins whose
+    radii are within a factor _RADIUS_CLASS of each other are searched together, one tree
+    against the other at their largest radius, then each pair is kept by that test. One query
+    per origin, with a Python list of its points, took 1.9 us an origin at 10,000 a frame and
+    2.9 at 100,000 (their queries in random order miss the cache); this takes about a quarter of
+    that with radii alike. Fewer origins than _ONE_QUERY_EACH_BELOW are queried one by one,
+    which costs less there.
+
+    Example
+    -------
+    >>> pairs_within(np.array([[0.0, 0.0], [10.0, 0.0]]), np.array([1.0, 5.0]), np.array([[0.0, 1.0], [12.0, 0.0], [0.5, 0.0]]))
+    (array([0, 0, 1]), array([0, 2, 1]))
     """
     empty = np.empty(0, np.int64)
     if origins.shape[0] == 0 or points.shape[0] == 0:
         return empty, empty
+    radius = np.broadcast_to(np.asarray(radius, dtype=float), origins.shape[:1])
+    if origins.shape[0] * points.shape[0] <= _ALL_DISTANCES_UP_TO:
+        dx = points[:, 0] - origins[:, 0, None]
+        dy = points[:, 1] - origins[:, 1, None]
+        owner, target = np.nonzero(dx * dx + dy * dy <= (radius * radius)[:, None])
+        return owner.astype(np.int64, copy=False), target.astype(np.int64, copy=False)
     if origins.shape[0] < _ONE_QUERY_EACH_BELOW:
-        found = cKDTree(points).query_ball_point(origins, radius)
+        found = tree_of(points).query_ball_point(origins, radius)
         counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
         return np.repeat(np.arange(len(found)), counts), np.fromiter(itertools.chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
-    radius = np.broadcast_to(np.asarray(radius, dtype=float), origins.shape[:1])
     reach = np.abs(radius)
     owners, targets = [], []
     everywhere = np.flatnonzero(np.isinf(reach))
@@ -65,7 +153,7 @@ def pairs_within(origins: np.ndarray, radius: np.ndarray, points: np.ndarray) ->
         targets.append(np.tile(np.arange(points.shape[0]), everywhere.size))
     finite = np.flatnonzero(np.isfinite(reach))
     if finite.size:
-        tree = cKDTree(points)
+        tree = tree_of(points)
         size_class = np.floor(np.log(np.maximum(reach[finite], _SMALLEST_RADIUS)) / np.log(_RADIUS_CLASS))
         for label in np.unique(size_class):
             members = finite[size_class == label]
@@ -134,7 +222,7 @@ def first_links(
         slave_cost = _SLAVE_SHARE * phi_max
     horizon = min(lookahead, len(frames))
     head, measurement = _first_candidates(frames[0], frames[1], limits.d_max, neighbours)
-    velocity = frames[1][measurement] - frames[0][head]
+    velocity = np.take(frames[1], measurement, axis=0) - np.take(frames[0], head, axis=0)
     valid = limits.admits(velocity)
     head, measurement = head[valid], measurement[valid]
     # A model measured on the data brings its own speed scale, so that a speed limit only
@@ -156,20 +244,21 @@ def first_links(
     points = [np.asarray(f, dtype=float) for f in frames[:horizon]]
     for step in range(1, horizon - 1):
         origin, target = links[-1]
-        start, middle = points[step - 1][origin], points[step][target]
+        # Rows taken by index (fancy indexing of (n, 2) arrays costs several times more).
+        start, middle = points[step - 1].take(origin, axis=0), points[step].take(target, axis=0)
         move = middle - start
         # A smooth continuation lies near the straight-line prediction, so each link looks at
         # the points nearest to it (exact gating by IM2 alone would reach far for fast links).
         k = min(_CONTINUATIONS, frames[step + 1].shape[0])
         if k and origin.size:
-            _, nearest_next = cKDTree(frames[step + 1]).query(middle + move, k=k)
+            _, nearest_next = tree_of(frames[step + 1]).query(middle + move, k=k)
             point_out = np.asarray(nearest_next).reshape(-1, k).ravel()
         else:
             point_out = np.empty(0, np.int64)
         link_in = np.repeat(np.arange(origin.size), k)
         middle_index = target[link_in]
-        next_velocity = frames[step + 1][point_out] - middle[link_in]
-        triplet_cost = smooth_motion_cost(move[link_in], next_velocity, model.w1, model.w2)
+        next_velocity = np.take(frames[step + 1], point_out, axis=0) - middle.take(link_in, axis=0)
+        triplet_cost = smooth_motion_cost(move.take(link_in, axis=0), next_velocity, model.w1, model.w2)
         ok = (triplet_cost <= phi_max) & limits.admits(next_velocity)
         link_in, point_out, middle_index, triplet_cost = link_in[ok], point_out[ok], middle_index[ok], triplet_cost[ok]
         # A link into a measured point may go on through a slave (one in a row at most), unless a
@@ -178,7 +267,7 @@ def first_links(
         smooth[link_in[triplet_cost < slave_cost]] = True
         into_measured = np.flatnonzero((target < frames[step].shape[0]) & ~smooth)
         slaves = frames[step + 1].shape[0] + np.arange(into_measured.size)
-        points[step + 1] = np.concatenate((points[step + 1], middle[into_measured] + move[into_measured]))
+        points[step + 1] = np.concatenate((points[step + 1], middle.take(into_measured, axis=0) + move.take(into_measured, axis=0)))
         link_in = np.concatenate((link_in, into_measured))
         point_out = np.concatenate((point_out, slaves))
         middle_index = np.concatenate((middle_index, target[into_measured]))
@@ -210,6 +299,6 @@ def _first_candidates(
     k = min(neighbours, second.shape[0])
     if k == 0 or first.shape[0] == 0:
         return np.empty(0, np.int64), np.empty(0, np.int64)
-    _, index = cKDTree(second).query(first, k=k)
+    _, index = tree_of(second).query(first, k=k)
     index = np.asarray(index).reshape(first.shape[0], k)
     return np.repeat(np.arange(first.shape[0]), k), index.ravel()

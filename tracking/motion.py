@@ -8,6 +8,7 @@ Costs are computed for a whole frame's candidate pairs at once, as flat arrays.
 from __future__ import annotations
 
 import abc
+import functools
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -40,6 +41,9 @@ class Candidates:
     previous_span : ndarray of int, shape (P,), optional
         Frames between those two measurements (the previous velocity is gap-normalised over
         them); all 1 when not given.
+    history : ndarray of float, shape (P, 5), optional
+        The head's own history of velocity changes
+        (:func:`seedtrack.tracking.mixture.add_chain_moments`); None when not kept.
     """
 
     head: np.ndarray
@@ -48,11 +52,15 @@ class Candidates:
     gap: np.ndarray
     previous_velocity: np.ndarray
     previous_span: np.ndarray | None = None
+    history: np.ndarray | None = None
 
-    @property
+    @functools.cached_property
     def velocity(self) -> np.ndarray:
-        """Candidate velocity, gap-normalised, pixels/frame, shape (P, 2)."""
-        return self.displacement / self.gap[:, None]
+        """Candidate velocity, gap-normalised, pixels/frame, shape (P, 2); read-only, worked
+        out once (a step asked for it five times)."""
+        velocity = self.displacement / self.gap[:, None]
+        velocity.flags.writeable = False
+        return velocity
 
     @property
     def has_history(self) -> np.ndarray:
@@ -61,14 +69,22 @@ class Candidates:
 
     def subset(self, keep: np.ndarray) -> "Candidates":
         """The pairs selected by a boolean or index array."""
-        return Candidates(
+        # Indices once, and rows taken rather than fancy-indexed: a step made four subsets.
+        keep = np.flatnonzero(keep) if keep.dtype == bool else keep
+        subset = Candidates(
             head=self.head[keep],
             measurement=self.measurement[keep],
-            displacement=self.displacement[keep],
+            displacement=self.displacement.take(keep, axis=0),
             gap=self.gap[keep],
-            previous_velocity=self.previous_velocity[keep],
+            previous_velocity=self.previous_velocity.take(keep, axis=0),
             previous_span=None if self.previous_span is None else self.previous_span[keep],
+            history=None if self.history is None else self.history[keep],
         )
+        if "velocity" in self.__dict__:
+            velocity = self.velocity.take(keep, axis=0)
+            velocity.flags.writeable = False
+            subset.__dict__["velocity"] = velocity
+        return subset
 
 
 # A speed at a limit stays within it whatever the last bits of the positions' differences: points
@@ -102,7 +118,9 @@ class SpeedLimits:
 
     def admits(self, velocity: np.ndarray) -> np.ndarray:
         """Boolean (P,): the velocities (P, 2), pixels/frame, whose speed is within the limits."""
-        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
+        return self._admits_speed(_speeds(velocity))
+
+    def _admits_speed(self, speed: np.ndarray) -> np.ndarray:
         ok = speed >= self.d_min * (1 - _ROUNDING)
         if self.d_max is not None:
             ok &= speed <= self.d_max * (1 + _ROUNDING)
@@ -115,10 +133,17 @@ class SpeedLimits:
     def scale(self, velocity: np.ndarray) -> float:
         """Speed that costs phi_max under the IM1 fallback, pixels/frame: d_max, or the fastest
         of the velocities (P, 2) given, at least 1."""
+        return self._scale_of_speeds(None if self.d_max is not None else _speeds(velocity))
+
+    def _scale_of_speeds(self, speed: np.ndarray | None) -> float:
         if self.d_max is not None:
             return float(self.d_max)
-        speed = np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
         return max(float(speed.max(initial=0.0)), 1.0)
+
+
+def _speeds(velocity: np.ndarray) -> np.ndarray:
+    """Speed of each velocity (P, 2), pixels/frame."""
+    return np.hypot(*np.asarray(velocity, dtype=float).reshape(-1, 2).T)
 
 
 def nearest_neighbour_cost(candidates: Candidates, scale: float) -> np.ndarray:
@@ -535,10 +560,14 @@ def acceptable_links(
     -------
     Candidates, ndarray of float (P',)
     """
-    candidates = candidates.subset(limits.admits(candidates.velocity))
-    cost = model.cost(candidates, phi_max, limits.scale(candidates.velocity))
+    # One speed per pair for both the gate and the scale.
+    speed = _speeds(candidates.velocity)
+    admitted = limits._admits_speed(speed)
+    if not admitted.all():
+        candidates, speed = candidates.subset(admitted), speed[admitted]
+    cost = model.cost(candidates, phi_max, limits._scale_of_speeds(speed))
     keep = cost <= phi_max
-    return candidates.subset(keep), cost[keep]
+    return (candidates, cost) if keep.all() else (candidates.subset(keep), cost[keep])
 
 
 # The default link cost, the model measured on a first pass, is registered with the others

@@ -19,8 +19,10 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Iterable
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .motion import Candidates, IndividualModel
 from .tracks import NO_MEASUREMENT, Tracks
@@ -48,6 +50,8 @@ _MIN_NOISE = 0.1
 _TAIL_DOF = 4.0
 # Runs of filled-in points longer than this are not counted as misses (_miss_chance).
 _SHORT_GAP = 3
+# Longest gap, frames spanned, for which returns are measured (_returns): the default max_gap + 1.
+_RETURN_GAPS = 11
 # Least triplets (three consecutive measured points on one track) that a fit needs.
 _MIN_TRIPLETS = 10
 _FASTEST = 0.99
@@ -102,6 +106,12 @@ class MotionStatistics:
         Tracks that start after the first frame, per frame per square pixel of the view,
         measured on the tracks: how likely a point is a new object rather than one seen before
         (:meth:`PersistentModel.join_costs`). None: not measured.
+    returns : tuple of float or None
+        Per gap of g = 2, 3, ... frames: the chance that where a run of measured points ends, a
+        run starts g frames later near it beyond what the start rate puts there (see
+        :func:`measured_chains`). Where objects vanish for a while (beads out of focus), a miss
+        is seldom alone, and a join across g frames is likelier than independent misses say.
+        None: not measured.
     """
 
     persistence: float
@@ -119,6 +129,7 @@ class MotionStatistics:
     density: float | None = None
     ended: float | None = None
     started: float | None = None
+    returns: tuple[float, ...] | None = None
 
     def gap_growth(self, gap: np.ndarray) -> np.ndarray:
         """Factor by which the variance of a velocity averaged over ``gap`` frames (its
@@ -211,6 +222,8 @@ class Chains:
     localisation : float
         Given localisation error of the positions, pixels per axis (standard deviation); 0 for
         none known.
+    returns : tuple of float or None
+        Measured returns per gap (see :class:`MotionStatistics`).
     """
 
     before: np.ndarray
@@ -223,6 +236,7 @@ class Chains:
     started: float | None = None
     resolution: float = 0.0
     localisation: float = 0.0
+    returns: tuple[float, ...] | None = None
 
 
 def measured_chains(tracks: Tracks, localisation: float = 0.0) -> Chains | None:
@@ -277,7 +291,52 @@ def measured_chains(tracks: Tracks, localisation: float = 0.0) -> Chains | None:
     del velocities
     b_all -= drift
     a_all -= drift
-    return Chains(b_all, a_all, drift, spread, missed, density, ended, started, resolution, localisation)
+    returns = _returns(tracks, spread, box)
+    return Chains(b_all, a_all, drift, spread, missed, density, ended, started, resolution, localisation, returns)
+
+
+def _returns(tracks: Tracks, spread: float, box: float) -> tuple[float, ...]:
+    """Per gap g = 2 .. ``_RETURN_GAPS`` frames: the share of the ends of runs of measured points
+    (a track's end, or where its filled-in points begin) near which a run starts g frames later,
+    beyond the starts the measured start rate puts there by chance.
+
+    Near: within 3 sqrt(2 g) ``spread`` (pixels/frame per axis, the velocities' spread about the
+    drift), where a point that moves at random is found after g frames; an object on a smooth
+    path is farther and shows none, and its joins are weighed on independent misses. Counted on
+    the runs, not on the tracks' joins: a first pass's joins of one object to another (objects
+    that leave while others enter) are then starts at the start rate, no excess. The excess less
+    two of its Poisson sigmas, so that chance alone gives none.
+
+    Example
+    -------
+    A point seen in frames 0-3 and 6-9 at rest, another in 0-9 far away:
+
+    >>> xy = np.zeros((2, 10, 2)); xy[1] += 50.0
+    >>> measurement = np.zeros((2, 10), np.int64); measurement[0, 4:6] = NO_MEASUREMENT
+    >>> xy[0, 4:6] = np.nan
+    >>> [round(float(r), 2) for r in _returns(Tracks.from_dense(xy, measurement), 0.3, 2500.0)[:3]]
+    [0.0, 0.95, 0.0]
+    """
+    measured = tracks.point_measurement != NO_MEASUREMENT
+    track, column, xy = tracks.point_track[measured], tracks.point_column[measured], tracks.point_xy[measured]
+    opens = np.r_[True, (track[1:] != track[:-1]) | (column[1:] != column[:-1] + 1)]
+    first = np.flatnonzero(opens)
+    last = np.r_[first[1:] - 1, track.size - 1]
+    start_column, end_column = column[first], column[last]
+    n = tracks.n_frames
+    rate = np.count_nonzero(start_column > 0) / (max(n - 1, 1) * box)
+    # One search for all frames: the frame is a third coordinate, frames farther apart than any
+    # radius, so that only starts of the one frame asked for lie within it.
+    apart = 2.0 * 3.0 * spread * np.sqrt(2.0 * _RETURN_GAPS) + 1.0
+    starts = cKDTree(np.column_stack((xy[first], start_column * apart)))
+    returns = []
+    for gap in range(2, _RETURN_GAPS + 1):
+        radius = 3.0 * spread * np.sqrt(2.0 * gap)
+        ends = last[end_column + gap < n]
+        found = int(np.sum(starts.query_ball_point(np.column_stack((xy[ends], (column[ends] + gap) * apart)), radius, return_length=True)))
+        chance = ends.size * rate * np.pi * radius**2
+        returns.append(min(max(found - chance - 2.0 * float(np.sqrt(chance)), 0.0) / max(ends.size, 1), 1.0))
+    return tuple(returns)
 
 
 def grid_step(xy: np.ndarray) -> float:
@@ -409,6 +468,7 @@ def fit_chains(chains: Chains) -> MotionStatistics:
         chains.density,
         chains.ended,
         chains.started,
+        chains.returns,
     )
 
 
@@ -459,17 +519,27 @@ def _predicted(about: np.ndarray, gap: np.ndarray, span: np.ndarray, persistence
     Each mean is turned by half a turn per frame it spans beyond one (its length is kept, so no
     prediction is longer than ``persistence`` times the velocity), then carried over the gap:
     the mean over k = 1..g of (persistence e^(i turn))^k."""
+    return _predictions(about, gap, span, persistence, (turn,))[0]
+
+
+def _predictions(about: np.ndarray, gap: np.ndarray, span: np.ndarray, persistence: float, turns: Iterable[float]) -> list[np.ndarray]:
+    """:func:`_predicted` for each of ``turns`` (radians), the gap and span looked up once."""
     if about.shape[0] == 0:
-        return about
+        return [about for _ in turns]
     # The (gap, span) pairs as one number each, looked up in a table of the few present: np.unique
     # over rows cost more than the rest of the prediction.
     wide = span.max() + 1
     key = gap * wide + span
     present = np.flatnonzero(np.bincount(key))
-    table = np.empty(present[-1] + 1, complex)
-    table[present] = [_carried(persistence, turn, g, m) for g, m in zip(present // wide, present % wide)]
-    turned = (about[:, 0] + 1j * about[:, 1]) * table[key]
-    return np.column_stack((turned.real, turned.imag))
+    complex_about = about[:, 0] + 1j * about[:, 1]
+    predictions = []
+    for turn in turns:
+        table = np.empty(present[-1] + 1, complex)
+        table[present] = [_carried(persistence, turn, g, m) for g, m in zip(present // wide, present % wide)]
+        # Times a whole array, not a scalar: numpy's loops for the two round differently.
+        turned = complex_about * table[key]
+        predictions.append(np.column_stack((turned.real, turned.imag)))
+    return predictions
 
 
 @functools.lru_cache(maxsize=1024)
@@ -550,12 +620,14 @@ class PersistentModel(IndividualModel, key="persistent"):
         """
         squared, spread, one_frame, gap = self._parts(candidates)
         cost = phi_max * (squared + spread) / self.gate**2
-        if self._decides_joins and (gap > 1).any():
+        back = np.flatnonzero(gap > 1) if self._decides_joins else ()
+        if len(back):
             # A head back from slaves takes a point only where that is likelier than its track
             # having ended and the point being a new object (the measured end chance and start
             # rate), as gap closing decides (:meth:`join_costs`): otherwise a head on slaves took
             # the point of an object that entered 30 px away six frames later (issue 29).
-            cost[(gap > 1) & (self._join_terms(squared, spread, one_frame, gap) > self._new_terms(one_frame))] = np.inf
+            join = self._join_terms(squared[back], spread[back], one_frame[back], gap[back])
+            cost[back[join > self._new_terms(one_frame[back])]] = np.inf
         return cost
 
     @property
@@ -575,12 +647,15 @@ class PersistentModel(IndividualModel, key="persistent"):
         gap = candidates.gap.astype(float)
         growth = s.gap_growth(gap)
         variance = np.where(known, s.noise**2 + s.relative**2 * speed2, s.spread**2 + s.noise**2) * growth
-        squared = np.full(known.shape, np.inf)
         span = np.ones(gap.shape, np.int64) if candidates.previous_span is None else candidates.previous_span
         moved = candidates.velocity - drift
-        for turn in {s.turn, -s.turn}:
-            residual = moved - _predicted(about, candidates.gap, span, s.persistence, turn)
-            squared = np.minimum(squared, np.einsum("ij,ij->i", residual, residual))
+        squared = None
+        for prediction in _predictions(about, candidates.gap, span, s.persistence, {s.turn, -s.turn}):
+            residual = moved - prediction
+            residual = np.einsum("ij,ij->i", residual, residual)
+            squared = residual if squared is None else np.minimum(squared, residual)
+        if squared is None:
+            squared = np.full(known.shape, np.inf)
         # The measurement is a position: its density across a gap is spread over the g^2 growth
         # times larger variance of the displacement, which a link over one frame does not pay
         # (twice the log of that ratio, in units of the squared distance). Without it a head back
@@ -656,11 +731,56 @@ class PersistentModel(IndividualModel, key="persistent"):
         new -= 2.0 * np.log(s.ended) + 2.0 * np.log(s.started)
         return join - new
 
+    def within_gate(self, candidates: Candidates) -> np.ndarray:
+        """Boolean per candidate: its cost (:meth:`cost`) within the gate, the misses of a gap
+        charged as :meth:`join_costs` charges them: no more than the measured returns say
+        where objects are seen to come back after that many frames, and a head back from
+        slaves vetoed as :meth:`cost` vetoes it.
+
+        Example
+        -------
+        A seed hidden for 5 frames where nothing else is ever missed: beyond the gate on
+        independent misses, within it where the runs showed such returns.
+
+        >>> stats = MotionStatistics(1.0, 0.5, 0.0, (0.0, 0.0), 2.0, 100, missed=4e-4, ended=4e-4, started=2e-7)
+        >>> pairs = Candidates(np.array([0]), np.array([0]), np.array([[18.0, 0.5]]), np.array([6]), np.array([[3.0, 0.0]]))
+        >>> back = MotionStatistics(1.0, 0.5, 0.0, (0.0, 0.0), 2.0, 100, missed=4e-4, ended=4e-4, started=2e-7, returns=(0.0, 0.0, 0.0, 0.0, 0.9))
+        >>> PersistentModel(stats, gate=9.0).within_gate(pairs).tolist(), PersistentModel(back, gate=9.0).within_gate(pairs).tolist()
+        ([False], [True])
+        """
+        squared, spread, one_frame, gap = self._parts(candidates)
+        inside = squared + spread - self._returned(gap) <= self.gate**2
+        back = np.flatnonzero(inside & (gap > 1)) if self._decides_joins else ()
+        if len(back):
+            # The veto of :meth:`cost` too: a join no likelier than an end and a new start.
+            inside[back] = self._join_terms(squared[back], spread[back], one_frame[back], gap[back]) <= self._new_terms(one_frame[back])
+        return inside
+
     def _join_terms(self, squared: np.ndarray, spread: np.ndarray, one_frame: np.ndarray, gap: np.ndarray) -> np.ndarray:
         """Twice the negative log-likelihood that a track end continues to a point ``gap`` frames
         later (squared sigmas, the gap's spread and miss terms of :meth:`cost`), its track not
         ending in between."""
-        return _tail(squared) + spread + 2.0 * np.log(2.0 * np.pi * one_frame) - 2.0 * gap * np.log1p(-self.statistics.ended)
+        s = self.statistics
+        join = _tail(squared) + spread + 2.0 * np.log(2.0 * np.pi * one_frame) - 2.0 * gap * np.log1p(-s.ended)
+        return join - self._returned(gap)
+
+    def _returned(self, gap: np.ndarray) -> np.ndarray:
+        """What the measured returns take off the charge of ``gap - 1`` independent misses
+        (twice the negative log-likelihood; 0 where none were measured).
+
+        Where the runs show objects coming back near where they were lost, a join across g
+        frames is weighed by that measured return (a run ending: a track's end or a miss)
+        when it is likelier than g - 1 independent misses (bulk water: beads drift out of
+        focus for several frames; weighed on independent misses, 0.05 ** 5 against an end,
+        tracks of a bead were cut at every such gap)."""
+        s = self.statistics
+        if not s.returns or s.missed is None or s.ended is None:
+            return np.zeros(np.shape(gap))
+        index = np.clip(gap.astype(np.int64) - 2, 0, len(s.returns) - 1)
+        back = np.where((gap >= 2) & (gap <= len(s.returns) + 1), np.asarray(s.returns)[index], 0.0)
+        independent = -2.0 * (gap - 1.0) * np.log(s.missed) - 2.0 * gap * np.log1p(-s.ended)
+        measured = -2.0 * np.log(np.maximum(back * (s.ended + (1.0 - s.ended) * s.missed), 1e-300))
+        return np.maximum(independent - measured, 0.0)
 
     def _new_terms(self, one_frame: np.ndarray) -> np.ndarray:
         """The same for the track ending and the point being a new object, its next step drawn

@@ -2,7 +2,8 @@
 ready within 2 s, the next frame shown within 100 ms of the key) and with 10,000 tracks (issue 31's:
 page ready within 3 s, an edit or undo answered within 0.3 s, a frame step drawn within 0.1 s).
 
-Run as ``python tests/benchmarks/bench_annotate.py``. First makes a 1920x1080 dish clip of 30
+Run as ``python tests/benchmarks/bench_annotate.py [--write-docs]`` (``--write-docs`` also writes
+the table into docs/ground-truth.md, stamped: ``annotate-speed``). First makes a 1920x1080 dish clip of 30
 frames with 150 seeds, serves it with its truth as the tracks, and prints:
 
 * page ready: from asking for the address to the first frame drawn with the tracks over it;
@@ -23,6 +24,7 @@ The machine's load average is printed too: the figures are wall-clock times.
 
 from __future__ import annotations
 
+import argparse
 import os
 import statistics
 import sys
@@ -38,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from chromium import headless_chromium  # noqa: E402
+from tables import write_table  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.keys import Keys  # noqa: E402
 
@@ -97,8 +100,9 @@ def write_clip(path: Path, rng: np.random.Generator) -> None:
             container.mux(packet)
 
 
-def dense() -> None:
-    """Issue 31's case: 10,000 tracks; page ready, frame steps, edits and undos in the browser."""
+def dense() -> list[list[str]]:
+    """Issue 31's case: 10,000 tracks; page ready, frame steps, edits and undos in the browser.
+    Returns the table's rows: case, measure, milliseconds, goal."""
     rng = np.random.default_rng(31)
     folder = Path(tempfile.mkdtemp(prefix="bench-annotate-dense-"))
     write_clip(folder / "clip.mp4", rng)
@@ -151,16 +155,23 @@ def dense() -> None:
     print(f"\n{DENSE_SIZE[0]}x{DENSE_SIZE[1]} clip, {DENSE_FRAMES} frames, {tracks.n_tracks:,} tracks, {len(tracks.point_track):,} points, headless Chromium")
     print(f"page ready: {ready * 1000:.0f} ms (goal 3000)")
     print(f"step to the next frame: median {statistics.median(steps):.0f} ms, 90th percentile {steps[int(0.9 * len(steps))]:.0f} ms, worst {steps[-1]:.0f} ms (goal 100)")
+    case = f"{tracks.n_tracks:,} tracks, {len(tracks.point_track):,} points, {DENSE_SIZE[0]}x{DENSE_SIZE[1]}"
+    rows = [[case, "page ready", f"{ready * 1000:.0f}", "3000"],
+            [case, "frame step (median / 90th percentile / worst)", f"{statistics.median(steps):.0f} / {steps[int(0.9 * len(steps))]:.0f} / {steps[-1]:.0f}", "100"]]
     for name, times in (("edit (split, delete a point)", edits), ("undo", undos)):
         times.sort()
         print(f"{name}, key to answer drawn: median {statistics.median(times):.0f} ms, worst {times[-1]:.0f} ms over {len(times)} (goal 300)")
+        rows.append([case, f"{name}, key to answer drawn (median / worst of {len(times)})", f"{statistics.median(times):.0f} / {times[-1]:.0f}", "300"])
     print(f"an edit's answer: {answer:,} bytes; the whole state: {whole:,} bytes")
     print(f"doubtful places of the last version in the page {(doubt + EDIT_PAUSE) * 1000:.0f} ms after the last undo (the page asks 0.8 s after an edit; they are not on an edit's path)")
     print(f"edits {EDIT_PAUSE:.1f} s apart, so that finding the doubtful places of one overlaps the next")
     print(f"load average while measuring: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    return rows + [[case, f"doubtful places in the page after the last undo (edits {EDIT_PAUSE:.1f} s apart)", f"{(doubt + EDIT_PAUSE) * 1000:.0f}", "-"]]
 
 
-def main() -> None:
+def dish() -> list[list[str]]:
+    """Issue 19's case: a 1080p dish clip; page ready, frame steps, cold frames. Returns the
+    table's rows: case, measure, milliseconds, goal."""
     folder = Path(tempfile.mkdtemp(prefix="bench-annotate-"))
     write_dish_clip(DishSpec(seeds=SEEDS, frames=FRAMES, width=1920, height=1080, rim_speed=30), folder)
     (folder / "out").mkdir()
@@ -204,8 +215,22 @@ def main() -> None:
     print(f"step to the next frame: median {statistics.median(steps):.0f} ms, 90th percentile {steps[int(0.9 * len(steps))]:.0f} ms, worst {steps[-1]:.0f} ms (goal 100)")
     print(f"cold next frame (decode + JPEG encode on the server): median {statistics.median(cold) * 1000:.0f} ms; jump back {FRAMES // 2} frames: {back * 1000:.0f} ms")
     print(f"load average while measuring: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    case = f"1920x1080 dish, {FRAMES} frames, {SEEDS} tracks"
+    return [
+        [case, "page ready", f"{ready * 1000:.0f}", "2000"],
+        [case, "frame step (median / 90th percentile / worst)", f"{statistics.median(steps):.0f} / {steps[int(0.9 * len(steps))]:.0f} / {steps[-1]:.0f}", "100"],
+        [case, f"cold frame on the server (median) / jump back {FRAMES // 2} frames", f"{statistics.median(cold) * 1000:.0f} / {back * 1000:.0f}", "-"],
+    ]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/ground-truth.md, stamped")
+    args = parser.parse_args()
+    rows = dish() + dense()
+    if args.write_docs:
+        write_table("ground-truth.md", "annotate-speed", ["case", "measured in headless Chromium", "ms (wall)", "goal, ms"], rows)
 
 
 if __name__ == "__main__":
     main()
-    dense()

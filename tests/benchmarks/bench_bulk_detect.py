@@ -1,6 +1,6 @@
 """What the spot detector counts on real bead footage, beside trackpy and a hand-marked truth.
 
-Run as ``python tests/benchmarks/bench_bulk_detect.py [--snr X ...]``. On every frame of
+Run as ``python tests/benchmarks/bench_bulk_detect.py [--snr X ...] [--write-docs]``. On every frame of
 ``shared/data/bulk-water-240-479.mp4``:
 
 - against trackpy at its walkthrough settings for this footage (``locate(frame, diameter=11,
@@ -16,7 +16,7 @@ Run as ``python tests/benchmarks/bench_bulk_detect.py [--snr X ...]``. On every 
 
 With ``--snr`` the same figures for the signal-to-background ratios given (the spot detector's
 knob), to show what it does. With ``--write-docs`` the table is also written into
-``docs/detection-rule.md``, between its ``bench_bulk_detect`` markers.
+``docs/detection-rule.md``, stamped: ``bulk-detect``.
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from bead_truth import CROPS, SIDE, TRUTH_DIR, grey_frames  # noqa: E402
 from seedtrack.detection.blobs import BlobOptions  # noqa: E402
 from seedtrack.detection.clip import ClipDetector, Detections, detect_frames  # noqa: E402
 from seedtrack.tracking.metrics import match_frame  # noqa: E402
+from tables import markdown_table, write_table  # noqa: E402
 
 NEAR_PX = 2.0
 TRUTH_PX = 3.0
@@ -110,9 +111,6 @@ def trackpy_misses(theirs: list[np.ndarray], truth: pd.DataFrame) -> str:
     return f"  trackpy misses {missed} marked beads, {near} of them within its separation (12 px) of one of its features; {unmarked} of its {features} features in the crops match no mark"
 
 
-MARKERS = ("<!-- bench_bulk_detect: begin -->", "<!-- bench_bulk_detect: end -->")
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--snr", type=float, nargs="*", default=[], help="also these signal-to-background ratios")
@@ -125,12 +123,10 @@ def main() -> None:
     print(f"bulk water, {len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}; trackpy (walkthrough) {sum(map(len, theirs)) / len(frames):.0f} features a frame")
     runs = [("seedtrack, defaults", {}), ("seedtrack, `--detector blob`", {"detector": "blob"})]
     runs += [(f"seedtrack, `--snr {snr:g}`", {"snr": snr}) for snr in args.snr]
-    table = [
-        "| detector | a frame | x trackpy's (range over frames) | ours near its features | its features found | precision / recall, reporting | tuning |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
-    ]
+    header = ["detector", "a frame", "x trackpy's (range over frames)", "ours near its features", "its features found", "precision / recall, reporting", "tuning"]
+    table = []
 
-    def row(name: str, points: list[np.ndarray], versus: tuple | None) -> str:
+    def row(name: str, points: list[np.ndarray], versus: tuple | None) -> list[str]:
         cells = [name, f"{sum(map(len, points)) / len(points):.0f}"]
         if versus is None:
             cells += ["1", "-", "-"]
@@ -140,7 +136,7 @@ def main() -> None:
         for frames_set in (reporting, TUNING_FRAMES):
             precision, recall, _, _ = against_truth(points, truth, frames_set)
             cells.append(f"{precision:.3f} / {recall:.3f}")
-        return "| " + " | ".join(cells) + " |"
+        return cells
 
     for name, options in runs:
         points, reason = seedtrack_points(frames, **options)
@@ -148,13 +144,11 @@ def main() -> None:
         table.append(row(name, points, against_trackpy(points, theirs)))
     table.append(row("trackpy, walkthrough settings", theirs, None))
     print(f"against trackpy (within {NEAR_PX:g} px) and the {len(truth)} marked beads (one-to-one within {TRUTH_PX:g} px; reporting frames {', '.join(map(str, reporting))}):")
-    print("\n".join(table))
-    print(trackpy_misses(theirs, truth))
+    print(markdown_table(header, table))
+    misses = trackpy_misses(theirs, truth)
+    print(misses)
     if args.write_docs:
-        page = Path(__file__).resolve().parents[2] / "docs" / "detection-rule.md"
-        text = page.read_text()
-        begin, end = text.index(MARKERS[0]) + len(MARKERS[0]), text.index(MARKERS[1])
-        page.write_text(text[:begin] + "\n" + "\n".join(table) + "\n\n" + trackpy_misses(theirs, truth).strip() + ".\n" + text[end:])
+        write_table("detection-rule.md", "bulk-detect", header, table, note=misses.strip() + ".")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """Precision of the spot detector on few bright spots on a dark background, beside trackpy.locate.
 
-Run as ``python tests/benchmarks/bench_detect_sparse.py [CLIPS]``. Clips like TrackMate's
+Run as ``python tests/benchmarks/bench_detect_sparse.py [CLIPS] [--write-docs]`` (``--write-docs`` also
+writes the table into docs/detection.md, stamped: ``detect-sparse``). Clips like TrackMate's
 FakeTracks sample (:mod:`seedtrack.data.sparsespots`: 50 frames of 128 x 128, 4 spots of sigma
 1.0 to 1.6 px and peaks of 8 to 30 photons wandering on a sloping background of 1 to 3 photons,
 Poisson noise times a gain of 7 grey levels plus read noise, 8 bits). In so small a frame with so
@@ -16,7 +17,7 @@ is matched one to one to a true centre within 2 px.
 
 from __future__ import annotations
 
-import sys
+import argparse
 import warnings
 
 import numpy as np
@@ -26,6 +27,7 @@ from seedtrack.data.sparsespots import SparseSpotSpec, make_sparse_spots
 from seedtrack.detection.choice import choose_detector
 from seedtrack.detection.spots import detect_spots
 from seedtrack.tracking.metrics import match_frame
+from tables import write_table
 
 TOLERANCE_PX = 2.0
 TUNING_SEEDS = (0, 1)
@@ -68,8 +70,12 @@ def score(found: list[list[np.ndarray]], clips) -> dict[str, float]:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("clips", nargs="?", type=int, default=3, help="reporting clips (default 3)")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/detection.md, stamped")
+    args = parser.parse_args()
     trackpy.quiet()
-    count = int(sys.argv[1]) if len(sys.argv) > 1 else 3
+    count = args.clips
     tuning = [make_sparse_spots(SparseSpotSpec(random_seed=seed)) for seed in TUNING_SEEDS]
     clips = [make_sparse_spots(SparseSpotSpec(random_seed=REPORTING_SEED + k)) for k in range(count)]
     minmass = max(MINMASSES, key=lambda m: score([trackpy_points(c.frames, m) for c in tuning], tuning)["f1"])
@@ -79,9 +85,13 @@ def main() -> None:
     spec = SparseSpotSpec()
     print(f"{count} clips x {spec.frames} frames of {spec.width}x{spec.height}, {spec.spots} spots each; match within {TOLERANCE_PX:g} px")
     print(f"{'detector':<26} {'found':>6} {'true':>6} {'recall':>7} {'precision':>9} {'RMS px':>7}")
+    rows = []
     for name, found in (("seedtrack", [points for points, _ in ours]), (f"trackpy (d {TRACKPY_DIAMETER}, minmass {minmass:g})", [trackpy_points(c.frames, minmass) for c in clips])):
         result = score(found, clips)
         print(f"{name:<26} {result['found']:>6} {result['true']:>6} {result['recall']:>7.4f} {result['precision']:>9.4f} {result['rms']:>7.3f}")
+        rows.append([name, result["found"], result["true"], f"{result['recall']:.3f}", f"{result['precision']:.3f}", f"{result['rms']:.3f}"])
+    if args.write_docs:
+        write_table("detection.md", "detect-sparse", ["detector", "found", "true", "recall", "precision", "RMS px"], rows)
 
 
 if __name__ == "__main__":

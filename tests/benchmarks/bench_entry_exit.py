@@ -1,6 +1,7 @@
 """Points entering and leaving (PSMG, IPAN's setting): strict trajectory merit of each tracker.
 
-Run as ``python tests/benchmarks/bench_entry_exit.py [--clips N]``. The experiments' base scene
+Run as ``python tests/benchmarks/bench_entry_exit.py [--clips N] [--write-docs]`` (``--write-docs`` also
+writes the table into docs/tracking.md, stamped: ``entry-exit``). The experiments' base scene
 (50 points in 200 x 200 px on average, speed 5 px/frame) with points drawn in a larger square so
 that they enter and leave, speed limit 10 px/frame for every tracker. Prints the strict
 trajectory merit (a trajectory counts only if one track follows it over every frame it is
@@ -20,6 +21,7 @@ from seedtrack.tracking.lifecycle import LifecycleConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.trackers import run_tracker
+from tables import write_table
 
 SCENES = (
     ("20 frames, no occlusion", dict(frames=20)),
@@ -37,6 +39,7 @@ TRACKERS = {
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", type=int, default=12)
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/tracking.md, stamped")
     args = parser.parse_args()
     print("| tracker | " + " | ".join(label for label, _ in SCENES) + " |")
     print("| --- |" + " --- |" * len(SCENES))
@@ -45,6 +48,7 @@ def main() -> None:
         for label, options in SCENES
     }
     limit = 2 * BASE.mean_speed
+    rows = []
     for name, track in TRACKERS.items():
         cells = []
         for label, _ in SCENES:
@@ -54,6 +58,9 @@ def main() -> None:
                 merit.append(100.0 * scores.correct_tracks / scores.true_tracks)
             cells.append(f"{statistics.mean(merit):.1f} % +- {ci95(merit):.1f}")
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+        rows.append([name, *cells])
+    if args.write_docs:
+        write_table("tracking.md", "entry-exit", ["tracker", *(label for label, _ in SCENES)], rows)
 
 
 if __name__ == "__main__":

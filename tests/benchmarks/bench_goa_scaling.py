@@ -1,6 +1,7 @@
 """GOA-updown run time against the number of points at constant density, on one core.
 
-Run as ``python tests/benchmarks/bench_goa_scaling.py [--sizes 100 1000 ...] [--repeats N]``.
+Run as ``python tests/benchmarks/bench_goa_scaling.py [--sizes 100 1000 ...] [--repeats N] [--write-docs]``
+(``--write-docs`` also writes the table into docs/tracking.md, stamped: ``goa-scaling``).
 PSMG scenes with the density of the experiments' base scene (50 points in 200 x 200 px, speed
 5 px/frame) over 20 frames. Prints, per size, the median seconds per frame step of the up pass
 and of the down pass, the seconds that choosing the first links takes (once per run), the whole
@@ -29,6 +30,7 @@ import numpy as np  # noqa: E402
 from seedtrack.experiments import BASE  # noqa: E402
 from seedtrack.data.psmg import generate_psmg  # noqa: E402
 from seedtrack.tracking.goa import GOAConfig, goa_updown, initial_links  # noqa: E402
+from tables import write_table  # noqa: E402
 
 FRAMES = 20
 
@@ -81,12 +83,14 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000, 3000, 10000])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--max-speed", type=float, default=None, help="d_max for GOA-updown (default none, as users run it)")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/tracking.md, stamped")
     args = parser.parse_args()
     config = GOAConfig(d_max=args.max_speed)
     print(f"GOA-updown, d_max {args.max_speed}, {FRAMES} frames, {BASE.trajectories} points per {BASE.size:g}^2 px, "
           f"speed {BASE.mean_speed:g} px/frame; medians of {args.repeats} runs; one core")
     print(f"{'points':>7} {'up s/frame':>11} {'down s/frame':>13} {'first links s':>14} {'total s':>8} {'trackpy s':>10} {'ours/trackpy':>13}")
-    per_step = []
+    time_trackpy(scene(100, seed=1), 2 * BASE.mean_speed)  # numba compiles trackpy's code on its first call
+    per_step, rows, exponents = [], [], []
     for n in args.sizes:
         frames = scene(n)
         runs = [time_updown(frames, config) for _ in range(args.repeats)]
@@ -94,6 +98,7 @@ def main() -> None:
         linked = time_trackpy(frames, 2 * BASE.mean_speed)
         ratio = f"{total / linked:13.2f}" if linked else f"{'-':>13}"
         print(f"{n:>7} {up:11.4f} {down:13.4f} {first:14.2f} {total:8.2f} {linked if linked else float('nan'):10.2f} {ratio}")
+        rows.append([f"{n:,}", f"{up:.4f} / {down:.4f}", f"{first:.2f}", f"{total:.2f}", f"{linked:.2f}" if linked else "-", ratio.strip()])
         per_step.append(max(up, down))
     # Fixed costs per step flatten the small sizes; the fit over 1,000 points and up shows the growth.
     sizes, per_step = np.array(args.sizes), np.array(per_step)
@@ -101,7 +106,13 @@ def main() -> None:
         chosen = sizes >= low
         if chosen.sum() > 1:
             slope = np.polyfit(np.log(sizes[chosen]), np.log(per_step[chosen]), 1)[0]
-            print(f"growth exponent of s/frame/pass (slower pass), {sizes[chosen].min()}-{sizes[chosen].max()} points: {slope:.2f}")
+            exponents.append(f"growth exponent of s/frame/pass (slower pass), {sizes[chosen].min():,}-{sizes[chosen].max():,} points: {slope:.2f}")
+            print(exponents[-1])
+    if args.write_docs:
+        header = ["points", "s/frame, up / down", "first links, s", "total, s", "trackpy `link`, s", "ours / trackpy"]
+        growth = "; ".join(exponents)
+        note = f"d_max {args.max_speed}, {FRAMES} frames, medians of {args.repeats} runs, CPU seconds on one core. {growth[:1].upper()}{growth[1:]}."
+        write_table("tracking.md", "goa-scaling", header, rows, note=note)
 
 
 if __name__ == "__main__":

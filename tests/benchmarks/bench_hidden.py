@@ -1,6 +1,7 @@
 """Seeds hidden for several frames on a turning dish: how many come back on their own track.
 
-Run as ``python tests/benchmarks/bench_hidden.py [--clips N]``. The dish generator's seed
+Run as ``python tests/benchmarks/bench_hidden.py [--clips N] [--write-docs]`` (``--write-docs`` also writes
+the first table into docs/tracking.md, stamped: ``hidden``). The dish generator's seed
 positions (80 seeds, 30 frames, a quarter of them hidden once for 2, 5 or 10 frames in a row,
 optionally 5 seeds added and 5 removed mid-clip) are tracked as ``seedtrack track`` does with no
 option (the motion is measured, then open GOA-updown). Prints the seeds whose track follows them
@@ -21,6 +22,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
+from tables import write_table
 
 SEEDS = 80
 GAPS = (2, 5, 10)
@@ -44,9 +46,11 @@ def seeds_kept(spec: DishSpec, **config) -> int:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clips", type=int, default=4)
+    parser.add_argument("--write-docs", action="store_true", help="write the first table into docs/tracking.md, stamped")
     args = parser.parse_args()
     print("| rim speed | " + " | ".join(f"hidden {gap} frames" for gap in GAPS) + " |")
     print("| --- |" + " --- |" * len(GAPS))
+    rows = []
     for label, options in ROWS:
         cells = []
         for gap in GAPS:
@@ -56,6 +60,9 @@ def main() -> None:
             ]
             cells.append(f"{statistics.mean(kept):.0f}/{SEEDS}")
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
+        rows.append([label, *cells])
+    if args.write_docs:
+        write_table("tracking.md", "hidden", ["rim speed", *(f"hidden {gap} frames" for gap in GAPS)], rows)
     print("\n| seeds missed per frame | rim speed | corner phi | corner zero |\n| --- | --- | --- | --- |")
     for missed, rim_speed in ((0.05, 20.0), (0.05, 42.0), (0.10, 10.0), (0.10, 30.0)):
         cells = []

@@ -1,6 +1,7 @@
 """Linking at scale: ``seedtrack.link`` beside ``trackpy.link`` (with numba), CPU seconds in one run.
 
-Run as ``python tests/benchmarks/bench_link_scale.py [--bulk DETECTIONS.csv] [--sizes 1000 10000 100000]``.
+Run as ``python tests/benchmarks/bench_link_scale.py [--bulk DETECTIONS.csv] [--sizes 1000 10000 100000] [--write-docs]``
+(``--write-docs`` also writes the table into docs/speed-linking.md, stamped: ``link-scale``).
 
 Random walkers (``seedtrack.data.walkers``, step sigma 1.5 px/axis, 300 walkers per 512 x 512 px,
 the view grown with the count) over ``--frames`` frames, and the detections of the bulk-water
@@ -23,11 +24,8 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import platform
 import re
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -41,6 +39,7 @@ from seedtrack.tracking.adaptive import SPEED_MARGIN
 
 # trackpy's clip, found where bench_bulk_water finds it (shared/data beside the checkout).
 from bench_bulk_water import CLIP as BULK_CLIP
+from tables import write_table
 
 # Walkers per 512 x 512 px: WalkerSpec's default scene.
 DENSITY = 300 / 512**2
@@ -129,7 +128,7 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=10)
     parser.add_argument("--repeats", type=int, nargs=3, default=[5, 3, 1], help="per size")
     parser.add_argument("--bulk", help="detections csv of the bulk-water clip")
-    parser.add_argument("--markdown", help="also write the table to this Markdown file")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/speed-linking.md, stamped")
     args = parser.parse_args()
     import trackpy
 
@@ -161,35 +160,14 @@ def main() -> None:
     slope = math.log(high / low) / math.log(high_points / low_points)
     said = f"log-log slope of seedtrack's CPU, {args.sizes[1]:,} to {args.sizes[2]:,} points a frame: {slope:.2f}"
     print(said)
-    if args.markdown:
-        write_markdown(Path(args.markdown), rows, said, args)
+    if args.write_docs:
+        header = ["points", "seedtrack, s", "trackpy, s", "seedtrack, us/point", "seedtrack / trackpy", "accuracy (seedtrack | trackpy)"]
+        cells = [[f"{name} ({count:,} points)", f"{ours:.2f}", f"{theirs:.2f}", f"{1e6 * ours / count:.1f}", f"{ours / theirs:.2f}", text]
+                 for name, count, ours, theirs, text in rows]
+        note = (f"{args.frames} frames of walkers, CPU seconds in one process, medians of {'/'.join(map(str, args.repeats))} runs. "
+                f"{said[0].upper()}{said[1:]}.")
+        write_table("speed-linking.md", "link-scale", header, cells, note=note)
 
-
-# The table's place in a Markdown page: between these lines, the rest of the page kept.
-BEGIN, END = "<!-- bench_link_scale.py: begin (written by the script) -->", "<!-- bench_link_scale.py: end -->"
-
-
-def write_markdown(path: Path, rows: list, slope: str, args: argparse.Namespace) -> None:
-    """The table as printed, with the machine's load and the command, into ``path`` between
-    ``BEGIN`` and ``END`` (the whole file when it has no such lines)."""
-    load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
-    lines = [
-        BEGIN,
-        f"`python tests/benchmarks/bench_link_scale.py {' '.join(sys.argv[1:])}` on {platform.node()} "
-        f"({os.cpu_count()} cores, load average {load} at the end), {time.strftime('%Y-%m-%d %H:%M %Z')}; "
-        f"{args.frames} frames of walkers, CPU seconds in one process, medians of {'/'.join(map(str, args.repeats))} runs.",
-        "",
-        "| points | seedtrack, s | trackpy, s | seedtrack, us/point | seedtrack / trackpy | accuracy (seedtrack \\| trackpy) |",
-        "| --- | --- | --- | --- | --- | --- |",
-    ]
-    for name, count, ours, theirs, said in rows:
-        lines.append(f"| {name} ({count:,} points) | {ours:.2f} | {theirs:.2f} | {1e6 * ours / count:.1f} | {ours / theirs:.2f} | {said.replace('|', chr(92) + '|')} |")
-    lines += ["", slope[0].upper() + slope[1:] + ".", END]
-    table = "\n".join(lines)
-    page = path.read_text(encoding="utf-8") if path.exists() else ""
-    if BEGIN in page and END in page:
-        table = page[: page.index(BEGIN)] + table + page[page.index(END) + len(END) :]
-    path.write_text(table if table.endswith("\n") else table + "\n", encoding="utf-8")
 
 if __name__ == "__main__":
     main()

@@ -4,20 +4,25 @@ runs in the memory of a short one.
 Run as ``python tests/benchmarks/bench_parallel.py [--quick]``. Prints, for a generated 300-frame
 640x512 dish clip:
 
-- ``run``'s CPU time over its wall time, with ``--workers 1`` and with the default (every core);
-  the CPU time is that of the command and every process it starts (they are reaped here, this
-  process being their subreaper);
-- its frames per second beside decoding the clip alone;
+- in turns (decoding alone, ``run --workers 1``, ``run --workers 2``), each one's wall time (and
+  ``run``'s CPU time, the command's and every process it starts: they are reaped here, this
+  process being their subreaper), the load average, each turn's ratios (``run`` over decoding
+  the clip alone as a whole process, imports included; 2 workers over 1) and their medians, and
+  whether the files of 1 and 2 workers are the same byte for byte (``--write-docs`` writes that
+  table into docs/batch.md);
 
 and, for generated 128x128 clips of 2,000 and 20,000 frames with 6 seeds, ``run``'s peak memory
 (``--workers 1``, one process: its maximum resident set) and their ratio (the goal: at most 1.2).
-``--quick`` skips the 20,000-frame clip, ``--memory-only`` the 300-frame clip, and ``--repeats N``
+``--quick`` skips the 20,000-frame clip, ``--memory-only`` the 300-frame clip, ``--speed-only``
+the long clips, and ``--repeats N``
 runs the 300-frame clip N times with each number of workers (in turns) and measures each long
 clip N times, and prints the median of each figure and of the ratios. ``--phases``
-prints instead, for one ``run --workers 2`` of the 300-frame clip, each phase's wall time and the
-CPU time of every thread of ``run`` and of the processes it starts (read from /proc every 20 ms),
-with the wall time two free cores would need at least: the larger of half the phase's CPU time
-and its busiest thread's; the imports phase is ``run``'s own beside the fork server's, started
+prints instead, for ``run --workers 1`` and ``--workers 2`` of the 300-frame clip (in turns, N of
+each), each phase's wall time and the CPU time of every thread of ``run`` and of the processes it
+starts (read from /proc every 20 ms), with the wall time two free cores would need at least: the
+larger of half the phase's CPU time and its busiest thread's; then that least wall time of the
+whole run and the ratio of 2 workers' to 1's, turn by turn. The imports phase is ``run``'s own
+beside the fork server's (with 2 workers), started
 first as ``run`` starts it. CPU times change little with the load, so on a
 busy machine that bound says what the wall time alone cannot. Wall times on a shared machine include what other
 programs take; run it when the machine is quiet, and read the CPU times beside them.
@@ -37,8 +42,7 @@ import time
 from pathlib import Path
 
 from seedtrack.data.dish import DishSpec, write_dish_clip
-from seedtrack.data.frames import open_frames
-from seedtrack.parallel import default_workers
+from tables import markdown_table, write_table
 
 _PR_SET_CHILD_SUBREAPER = 36
 
@@ -89,57 +93,69 @@ def seedtrack(*args) -> list[str]:
     return [sys.executable, "-m", "seedtrack", *map(str, args)]
 
 
-def decode_seconds(clip: Path) -> float:
-    start = time.perf_counter()
-    with open_frames(clip) as source:
-        for _ in source:
-            pass
-    return time.perf_counter() - start
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="skip the 20,000-frame clip")
     parser.add_argument("--memory-only", action="store_true", help="skip the 300-frame clip (cores and frames/s)")
+    parser.add_argument("--speed-only", action="store_true", help="skip the long clips (peak memory)")
     parser.add_argument("--repeats", type=int, default=1, metavar="N", help="runs of the 300-frame clip per number of workers, and peak memory measurements per long clip (default 1)")
-    parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of one run with 2 workers")
+    parser.add_argument("--phases", action="store_true", help="CPU time of every thread and process, phase by phase, of runs with 1 and 2 workers")
+    parser.add_argument("--write-docs", action="store_true", help="write the speed and memory tables (with --phases: the least wall times) into docs/batch.md, stamped")
     args = parser.parse_args()
     become_subreaper()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         if args.phases:
-            phases(folder)
+            phases(folder, args.repeats, args.write_docs)
             return
         if not args.memory_only:
-            cores(folder, args.repeats)
-        long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+            cores(folder, args.repeats, args.write_docs)
+        if not args.speed_only:
+            header, rows = long_clips(folder, (2_000,) if args.quick else (2_000, 20_000), args.repeats)
+            if args.write_docs and not args.quick:  # the table is the ratio of the long clip to the short
+                write_table("batch.md", "run-memory", header, rows)
 
 
-def cores(folder: Path, repeats: int) -> None:
-    """CPU over wall time and frames/s of ``run`` on a 300-frame 640x512 clip, ``repeats`` turns
-    of each number of workers."""
+# Decoding the clip alone, as a whole process, as `run` decodes it (imports included).
+_DECODE = "import sys\nfrom seedtrack.data.frames import open_frames\nwith open_frames(sys.argv[1]) as frames:\n    for _ in frames:\n        pass\n"
+SPEED_HEADER = [
+    "turn", "load average", "decoding alone, s", "`--workers 1` wall, s (CPU)", "`--workers 2` wall, s (CPU)",
+    "workers 1 / decoding", "workers 2 / decoding", "workers 2 / workers 1",
+]
+
+
+def cores(folder: Path, repeats: int, write_docs: bool = False) -> None:
+    """Wall and CPU time of ``run`` on a 300-frame 640x512 clip with 1 and 2 workers beside
+    decoding the clip alone, in turns (decoding, 1, 2; ``repeats`` turns), each turn's ratios and
+    their medians; ``write_docs`` writes the table into docs/batch.md."""
     clip = folder / "dish" / "clip.mp4"
     write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
-    counts = ("1", str(default_workers()))
-    decode = min(decode_seconds(clip) for _ in range(2))
-    print(f"300 frames, 640x512, 80 seeds; {default_workers()} cores usable; load average {os.getloadavg()[0]:.1f}")
-    print(f"decoding alone: {300 / decode:.0f} frames/s")
-    print("| workers | wall, s | CPU, s | CPU / wall | frames/s | of decoding's | load average |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
-    rows = {workers: [] for workers in counts}
+    print(f"300 frames, 640x512, 80 seeds; {os.cpu_count()} cores; {repeats} turns of decoding alone, run --workers 1, run --workers 2")
+    turns = []
     for _ in range(repeats):
-        for workers in counts:
-            load = os.getloadavg()[0]
-            wall, cpu, _ = measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))
-            rows[workers].append((wall, cpu))
-            print(f"| {workers} | {wall:.1f} | {cpu:.1f} | {cpu / wall:.2f} | {300 / wall:.0f} | {decode / wall:.0%} | {load:.1f} |")
-    if repeats > 1:
-        for workers in counts:
-            walls, cpus = zip(*rows[workers])
-            ratios = [cpu / wall for wall, cpu in rows[workers]]
-            print(f"| {workers}, median of {repeats} | {statistics.median(walls):.1f} | {statistics.median(cpus):.1f} | {statistics.median(ratios):.2f} ({min(ratios):.2f} to {max(ratios):.2f}) | {300 / statistics.median(walls):.0f} | {decode / statistics.median(walls):.0%} | |")
-    same = all((folder / "run1" / name).read_bytes() == (folder / f"run{default_workers()}" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
-    print(f"files identical for 1 and {default_workers()} workers: {same}")
+        load = os.getloadavg()[0]
+        decode, _, _ = measured([sys.executable, "-c", _DECODE, str(clip)])
+        runs = {workers: measured(seedtrack("run", clip, "--out", folder / f"run{workers}", "--workers", workers))[:2] for workers in ("1", "2")}
+        turns.append((load, decode, runs["1"], runs["2"]))
+        print(f"load {load:.1f}: decoding {decode:.2f} s, workers 1 {runs['1'][0]:.2f} s, workers 2 {runs['2'][0]:.2f} s", flush=True)
+    rows = [
+        [str(number), f"{load:.1f}", f"{decode:.2f}", f"{one[0]:.2f} ({one[1]:.2f})", f"{two[0]:.2f} ({two[1]:.2f})",
+         f"{one[0] / decode:.2f}", f"{two[0] / decode:.2f}", f"{two[0] / one[0]:.2f}"]
+        for number, (load, decode, one, two) in enumerate(turns, 1)
+    ]
+    loads, decodes, ones, twos = zip(*turns)
+    median = statistics.median
+    rows.append([
+        f"median of {repeats}", f"{median(loads):.1f}", f"{median(decodes):.2f}",
+        f"{median(w for w, _ in ones):.2f} ({median(c for _, c in ones):.2f})", f"{median(w for w, _ in twos):.2f} ({median(c for _, c in twos):.2f})",
+        f"{median(o[0] / d for d, o in zip(decodes, ones)):.2f}", f"{median(t[0] / d for d, t in zip(decodes, twos)):.2f}",
+        f"**{median(t[0] / o[0] for o, t in zip(ones, twos)):.2f}**",
+    ])
+    print(markdown_table(SPEED_HEADER, rows))
+    same = all((folder / "run1" / name).read_bytes() == (folder / "run2" / name).read_bytes() for name in ("detections.csv", "tracks.csv", "overlay.mp4"))
+    print(f"files identical for 1 and 2 workers: {same}")
+    if write_docs:
+        write_table("batch.md", "run-speed", SPEED_HEADER, rows + [["files identical for 1 and 2 workers", str(same), "", "", "", "", "", ""]])
 
 
 _PHASES = """
@@ -204,14 +220,16 @@ if __name__ == "__main__":
     threading.Thread(target=sampler, daemon=True).start()
     mark("")
     mark("imports")
-    # As `seedtrack run` does before its imports.
+    workers = int(sys.argv[3])
+    # As `seedtrack run` does before its imports, with more than one worker.
     from seedtrack.processes import start_fork_server
-    start_fork_server()
+    if workers > 1:
+        start_fork_server()
     import seedtrack.pipeline as pipeline
     pipeline.detect_clip = marked("detection", pipeline.detect_clip)
     pipeline.track_frames = marked("tracking", pipeline.track_frames)
     pipeline._render = marked("overlay", pipeline._render)
-    pipeline.run_pipeline(Path(sys.argv[1]), Path(sys.argv[2]), workers=2)
+    pipeline.run_pipeline(Path(sys.argv[1]), Path(sys.argv[2]), workers=workers)
     time.sleep(0.1)  # the encoder's last CPU time is read before it is reaped
     mark("end")
     for (name, start, before), (_, end, after) in zip(marks[1:], marks[2:]):
@@ -220,31 +238,50 @@ if __name__ == "__main__":
 """
 
 
-def phases(folder: Path) -> None:
-    """Per phase of ``run --workers 2`` on the 300-frame clip: wall, CPU, busiest threads and the
-    least wall time two free cores would need."""
+PHASES_HEADER = ["turn", "load average", "`--workers 1`: least wall on two free cores, s", "`--workers 2`: the same, s", "workers 2 / workers 1"]
+
+
+def phases(folder: Path, repeats: int, write_docs: bool = False) -> None:
+    """Per phase of ``run --workers 1`` and ``--workers 2`` on the 300-frame clip, in turns: wall,
+    CPU, busiest threads and the least wall time two free cores would need; then that least wall
+    time of each run, and the ratio of 2 workers' to 1's in each turn (``write_docs``: into
+    docs/batch.md)."""
     clip = folder / "dish" / "clip.mp4"
     write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
     script = folder / "phases.py"
     script.write_text(_PHASES)
-    load = os.getloadavg()[0]
-    lines = subprocess.run([sys.executable, str(script), str(clip), str(folder / "out")], check=True, capture_output=True, text=True).stdout.splitlines()
-    print(f"run --workers 2, 300 frames, 640x512, 80 seeds; load average {load:.1f}")
-    print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
-    print("| --- | --- | --- | --- | --- |")
-    totals = [0.0, 0.0, 0.0]
-    for line in (line for line in lines if line.startswith("phase ")):
-        name, wall, cpu, *busiest = line.split()[1:]
-        wall, cpu, busiest = float(wall), float(cpu), [float(value) for value in busiest]
-        bound = max(cpu / 2, busiest[0])
-        totals = [totals[0] + wall, totals[1] + cpu, totals[2] + bound]
-        print(f"| {name} | {wall:.2f} | {cpu:.2f} | {', '.join(f'{value:.2f}' for value in busiest)} | {bound:.2f} |")
-    print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
+    least, loads = {1: [], 2: []}, []
+    for _ in range(repeats):
+        loads.append(os.getloadavg()[0])
+        for workers in (1, 2):
+            load = os.getloadavg()[0]
+            command = [sys.executable, str(script), str(clip), str(folder / f"out{workers}"), str(workers)]
+            lines = subprocess.run(command, check=True, capture_output=True, text=True).stdout.splitlines()
+            print(f"run --workers {workers}, 300 frames, 640x512, 80 seeds; load average {load:.1f}")
+            print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
+            print("| --- | --- | --- | --- | --- |")
+            totals = [0.0, 0.0, 0.0]
+            for line in (line for line in lines if line.startswith("phase ")):
+                name, wall, cpu, *busiest = line.split()[1:]
+                wall, cpu, busiest = float(wall), float(cpu), [float(value) for value in busiest]
+                bound = max(cpu / 2, busiest[0])
+                totals = [totals[0] + wall, totals[1] + cpu, totals[2] + bound]
+                print(f"| {name} | {wall:.2f} | {cpu:.2f} | {', '.join(f'{value:.2f}' for value in busiest)} | {bound:.2f} |")
+            print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
+            least[workers].append(totals[2])
+    ratios = [two / one for one, two in zip(least[1], least[2])]
+    rows = [[str(number), f"{load:.1f}", f"{one:.2f}", f"{two:.2f}", f"{two / one:.2f}"] for number, (load, one, two) in enumerate(zip(loads, least[1], least[2]), 1)]
+    median = statistics.median
+    rows.append([f"median of {repeats}", f"{median(loads):.1f}", f"{median(least[1]):.2f}", f"{median(least[2]):.2f}", f"**{median(ratios):.2f}**"])
+    print(markdown_table(PHASES_HEADER, rows))
+    if write_docs:
+        write_table("batch.md", "run-phases", PHASES_HEADER, rows)
 
 
-def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
+def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> tuple[list[str], list[list[str]]]:
     """Peak memory of ``run`` on 6-seed clips of each length, ``repeats`` times (one run of each
-    length after the other, so that a ratio compares runs made under the same load)."""
+    length after the other, so that a ratio compares runs made under the same load): the table's
+    header and rows, the medians, the last with the ratio to the first (goal at most 1.2)."""
     clips = {}
     for frames in lengths:
         clips[frames] = folder / f"long{frames}" / "clip.mp4"
@@ -262,6 +299,10 @@ def long_clips(folder: Path, lengths: tuple[int, ...], repeats: int) -> None:
         medians = ", ".join(f"{frames:,} frames {statistics.median(peaks[frames]) / 1024:.0f} MB" for frames in lengths)
         ratio = f"; ratio {statistics.median(ratios):.2f} x (of {min(ratios):.2f} to {max(ratios):.2f})" if ratios else ""
         print(f"median of {repeats}: {medians}{ratio}")
+    rows = [[f"{frames:,}", f"{statistics.median(peaks[frames]) / 1024:.0f}"] for frames in lengths]
+    if ratios:
+        rows[-1][1] += f" (ratio {statistics.median(ratios):.2f} x, {min(ratios):.2f} to {max(ratios):.2f} over {repeats}; goal 1.2)"
+    return ["frames, 128x128, 6 seeds", f"peak, MB (median of {repeats})"], rows
 
 
 if __name__ == "__main__":

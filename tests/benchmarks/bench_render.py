@@ -1,12 +1,14 @@
 """Frames per second of the overlay renderer on one core: 200 tracks over 1920x1080 frames.
 
-Run as ``python tests/benchmarks/bench_render.py``; prints the median of several repeats for
+Run as ``python tests/benchmarks/bench_render.py [--write-docs]`` (``--write-docs`` also writes the
+table into docs/cli.md, stamped: ``render-speed``); prints the median of several repeats for
 drawing alone (what issue #5 asks: at least 30 frames/s) and, for reference, for drawing plus
 H.264 encoding with the writer the ``render`` command uses.
 """
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import tempfile
 import time
@@ -18,6 +20,7 @@ import numpy as np
 from seedtrack.drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from seedtrack.data.video import write_video
 from seedtrack.tracking.tracks import Tracks
+from tables import write_table
 
 WIDTH, HEIGHT, TRACKS, FRAMES, TRAIL = 1920, 1080, 200, 40, 10
 
@@ -49,6 +52,9 @@ def frames_per_second(render, count: int, repeats: int = 5) -> float:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/cli.md, stamped")
+    args = parser.parse_args()
     cv2.setNumThreads(1)  # one core, as the issue asks
     rng = np.random.default_rng(0)
     frames, tracks = scene(rng)
@@ -63,16 +69,20 @@ def main() -> None:
         for index, image in enumerate(frames):
             annotate(image, index, view, [layer], **options)
 
-    fps = frames_per_second(draw, FRAMES)
-    print(f"render {WIDTH}x{HEIGHT}, {TRACKS} tracks, trail {TRAIL}: {fps:.1f} frames/s median (goal 30)")
+    drawn = frames_per_second(draw, FRAMES)
+    print(f"render {WIDTH}x{HEIGHT}, {TRACKS} tracks, trail {TRAIL}: {drawn:.1f} frames/s median (goal 30)")
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "clip.mp4"
 
         def encode() -> None:
             write_video(out, (annotate(image, index, view, [layer], **options) for index, image in enumerate(frames)), 25.0)
 
-        fps = frames_per_second(encode, FRAMES, repeats=3)
-    print(f"render + H.264 encode (one x264 thread): {fps:.1f} frames/s median")
+        encoded = frames_per_second(encode, FRAMES, repeats=3)
+    print(f"render + H.264 encode (one x264 thread): {encoded:.1f} frames/s median")
+    if args.write_docs:
+        scene_name = f"{WIDTH}x{HEIGHT}, {TRACKS} tracks, trail {TRAIL}, {FRAMES} frames"
+        rows = [[scene_name, "drawing", f"{drawn:.1f}", "30"], [scene_name, "drawing + H.264 (one x264 thread)", f"{encoded:.1f}", "-"]]
+        write_table("cli.md", "render-speed", ["scene", "work", "frames/s (CPU, one core, median)", "goal"], rows)
 
 
 if __name__ == "__main__":

@@ -140,8 +140,9 @@ def _scores(tracks: Tracks, truth: Tracks) -> tuple[float, float, float]:
     return s.correct_tracks / s.true_tracks, clear_mot(tracks, truth, TOLERANCE).idf1, s.link_error
 
 
-def run_cell(name: str, clips, limits) -> tuple[tuple[float, float, float], float, str]:
-    """Mean (strict merit, IDF1, link error) over the clips, CPU seconds, and a note."""
+def run_cell(name: str, clips, limits, peer=_peer) -> tuple[tuple[float, float, float], float, str]:
+    """Mean (strict merit, IDF1, link error) over the clips, CPU seconds, and a note; ``peer``
+    makes the peer's tracker from its name."""
     if name in ("seedtrack", "oracle"):
         started = time.process_time()
         tracks = [link_goa(f)[0] if name == "seedtrack" else oracle(f, t) for f, t in clips]
@@ -152,7 +153,7 @@ def run_cell(name: str, clips, limits) -> tuple[tuple[float, float, float], floa
     for factor in SWEEP:
         started = time.process_time()
         try:
-            tracks = [_peer(name)(f, factor * v) for (f, _), v in zip(clips, limits)]
+            tracks = [peer(name)(f, factor * v) for (f, _), v in zip(clips, limits)]
         except PeerFailure:
             continue
         cpu = time.process_time() - started

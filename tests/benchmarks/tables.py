@@ -97,13 +97,15 @@ def replace_block(text: str, name: str, body: str) -> str:
     return f"{head}{begin}\n{lines}\n{indent}{end}{tail}"
 
 
-def write_table(page: str | Path, name: str, header: list[str], rows: list[list[object]], command: str | None = None) -> Path:
+def write_table(page: str | Path, name: str, header: list[str], rows: list[list[object]], command: str | None = None, note: str = "") -> Path:
     """Replace table ``name`` of docs page ``page`` (a name under docs/ or a path) with ``rows``,
-    stamped with ``command`` (default: this script's command line), the commit and the machine.
+    stamped with ``command`` (default: this script's command line), the commit and the machine,
+    and followed by ``note`` (a figure the script printed that is no row, such as a slope).
     The page is written to a temporary file and renamed, so it is whole whatever happens."""
     path = Path(page) if Path(page).is_absolute() or Path(page).exists() else DOCS / page
     command = command or "python " + shlex.join([os.path.relpath(sys.argv[0], ROOT), *sys.argv[1:]])
-    text = replace_block(path.read_text(encoding="utf-8"), name, f"{stamp(command)}\n\n{markdown_table(header, rows)}")
+    body = f"{stamp(command)}\n\n{markdown_table(header, rows)}" + (f"\n\n{note}" if note else "")
+    text = replace_block(path.read_text(encoding="utf-8"), name, body)
     temporary = path.with_name(path.name + ".tmp")
     temporary.write_text(text, encoding="utf-8")
     temporary.replace(path)
