@@ -222,7 +222,7 @@ def track_frames(
     """
     if settings.algorithm not in GOA_FAMILY:
         return drop_short(run_tracker(settings.algorithm, frames, settings.config.d_max, first_frame), settings.min_length)
-    steps = pass_steps(settings.algorithm, len(frames), settings.motion, settings.keep_model)
+    steps = pass_steps(settings.algorithm, [len(f) for f in frames], settings.motion, settings.keep_model)
     with progress_bar(steps, "tracking", unit="step") as bar:
         tracks, fit = link_goa(
             frames,

@@ -19,7 +19,7 @@ from .gap_closing import split_through_held
 from .goa import GOAConfig, Progress, goa, goa_updown, initial_links
 from .goa import pass_steps as _updown_steps
 from .lifecycle import LifecycleConfig, goa_updown_open
-from .adaptive import REFITS, head_slaves, track_measured_motion
+from .adaptive import REFITS, head_slaves, sample_frames, track_measured_motion
 from .regime import MotionFit, choose_motion, fit_motion, track_without_drift
 from .tracks import Tracks, point_frames
 
@@ -108,9 +108,9 @@ def link_goa(
         raise ValueError(f"algorithm must be one of {', '.join(GOA_FAMILY)}, got {algorithm!r}")
     frames = point_frames(frames)
 
-    def track(moved: list[np.ndarray], fitted: GOAConfig) -> Tracks:
+    def track(moved: list[np.ndarray], fitted: GOAConfig, given: np.ndarray | None = first_links) -> Tracks:
         if algorithm == "goa":
-            initial = first_links if first_links is not None else initial_links(moved, fitted)
+            initial = given if given is not None else initial_links(moved, fitted)
             return goa(moved, initial, fitted, first_frame, progress=progress)
         if algorithm == "goa-updown-fixed" or lifecycle is None:
             return goa_updown(moved, fitted, first_frame, progress=progress)
@@ -120,7 +120,8 @@ def link_goa(
         return goa_updown_open(moved, fitted, kept, first_frame, progress=progress)
 
     if motion == "auto" and not keep_model:
-        tracks, fit = track_measured_motion(frames, config, track)
+        # The first links given are the whole clip's first frames', not a sample's.
+        tracks, fit = track_measured_motion(frames, config, track, lambda moved, fitted: track(moved, fitted, None))
     else:
         fit = fit_to_motion(frames, config, motion, keep_model)
         tracks = track_without_drift(frames, fit.drift, lambda moved: track(moved, fit.config))
@@ -146,11 +147,23 @@ def _measured_exactly(tracks: Tracks, frames: list[np.ndarray]) -> Tracks:
     return tracks
 
 
-def pass_steps(algorithm: str, n_frames: int, motion: str = "auto", keep_model: bool = False) -> int:
-    """Number of progress calls :func:`link_goa` makes for ``n_frames`` frames (a pass's times
-    2 + REFITS when the motion is measured on a first pass)."""
-    steps = max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
-    return (2 + REFITS) * steps if motion == "auto" and not keep_model else steps
+def pass_steps(algorithm: str, counts: Sequence[int], motion: str = "auto", keep_model: bool = False) -> int:
+    """Number of progress calls :func:`link_goa` makes for frames of ``counts`` points each: a
+    pass's over all of them, and when the motion is measured, 1 + REFITS passes' over the frames
+    of the sample (:func:`seedtrack.tracking.adaptive.sample_frames`).
+
+    Example
+    -------
+    >>> pass_steps("goa-updown", [10] * 30), pass_steps("goa-updown", [10] * 30, motion="random")
+    (174, 58)
+    """
+
+    def steps(n_frames: int) -> int:
+        return max(n_frames - 1, 0) if algorithm == "goa" else _updown_steps(n_frames)
+
+    if motion != "auto" or keep_model:
+        return steps(len(counts))
+    return (1 + REFITS) * steps(len(sample_frames(counts))) + steps(len(counts))
 
 
 __all__ = ["GOA_FAMILY", "MotionFit", "fit_to_motion", "link_goa", "pass_steps"]
