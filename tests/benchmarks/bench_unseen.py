@@ -34,6 +34,7 @@ from seedtrack.tracking.clear_mot import clear_mot
 from seedtrack.tracking.linking import link_goa
 from seedtrack.tracking.metrics import score_tracks
 from seedtrack.tracking.tracks import NO_MEASUREMENT, Tracks
+from tables import write_table
 
 TOLERANCE = 0.5
 SEED_SETS = {"tuning": range(0, 5), "reporting": range(1000, 1005)}
@@ -169,6 +170,7 @@ def main() -> None:
     parser.add_argument("--seeds", choices=tuple(SEED_SETS), default="reporting")
     parser.add_argument("--only", default="", help="scenes whose label contains this")
     parser.add_argument("--trackers", default="", help="comma-separated tracker names (default all)")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/motion.md, stamped (table unseen)")
     args = parser.parse_args()
     names = [n for n in args.trackers.split(",") if n] or list(TRACKERS)
     seeds = SEED_SETS[args.seeds]
@@ -176,6 +178,7 @@ def main() -> None:
     print("| scene | points | v | " + " | ".join(names) + " |")
     print("| --- | --- | --- |" + " --- |" * len(names))
     totals: dict[str, list[float]] = {n: [] for n in names}
+    rows = []
     for scene in SCENES:
         if args.only not in scene.label:
             continue
@@ -188,10 +191,14 @@ def main() -> None:
             totals[name].append(cpu / points)
             cells.append(f"{merit:.3f} / {idf1:.3f} / {link:.3f}, {cpu:.2f} s" + (f" [{note}]" if note else ""))
             print(f"  {scene.label} {name}: {cells[-1]}", file=sys.stderr, flush=True)
+        rows.append([scene.label, points, f"{statistics.mean(limits):.1f}", *cells])
         print(f"| {scene.label} | {points} | {statistics.mean(limits):.1f} | " + " | ".join(cells) + " |", flush=True)
-    print("\nCPU microseconds per point, median over scenes (max): " + ", ".join(
+    cost = "CPU microseconds per point, median over scenes (max): " + ", ".join(
         f"{n} {1e6 * statistics.median(c):.0f} ({1e6 * max(c):.0f})" for n, c in totals.items() if c
-    ))
+    )
+    print("\n" + cost)
+    if args.write_docs:
+        write_table("motion.md", "unseen", ["scene", "points", "v", *names], rows, note=cost + ".")
 
 
 if __name__ == "__main__":
