@@ -126,9 +126,11 @@ class EndTracks:
         # The gate depends on the speed alone, the same backwards and forwards.
         speed = np.hypot(*bridge.T)
         radius = config.speed.reach(config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max))
-        untracked = _continues(origin, -bridge, gap, radius, [frames[step - 1][free[step - 1]]], config)
+        undone = _continues(origin, -bridge, gap, radius, [frames[step - 1][free[step - 1]]], config)
+        if not undone.all():
+            undone |= ~_continues(origin, bridge, gap, radius, after, config)
         taken = taken.copy()
-        taken[np.flatnonzero(back)[~_continues(origin, bridge, gap, radius, after, config) | untracked]] = UNASSIGNED
+        taken[np.flatnonzero(back)[undone]] = UNASSIGNED
         return taken
 
 
@@ -145,6 +147,8 @@ def _continues(
             continue
         pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner], span[owner])
         found[acceptable_links(config.individual, pairs, config.phi_max, config.speed)[0].head] = True
+        if found.all():
+            break
     return found
 
 
