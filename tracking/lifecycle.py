@@ -27,7 +27,7 @@ import numpy as np
 
 from .assignment import UNASSIGNED
 from .gap_closing import FillGaps
-from .goa import GOAConfig, HeadState, Progress, _initial_links, goa_pass, goa_updown
+from .goa import GOAConfig, HeadState, Progress, _initial_links, assign_step, goa_updown
 from .initialisation import pairs_within
 from .motion import Candidates, acceptable_links
 from .tracks import Tracks
@@ -75,12 +75,27 @@ class OpenTracks:
             local = np.arange(window[0].shape[0])[:, None]
         else:
             first = _initial_links(ahead, config)
-            local = goa_pass(window, first[first[:, 1] != UNASSIGNED], config)
-            local = local[(local != UNASSIGNED).all(axis=1)]
+            local = _confirmed(window, first[first[:, 1] != UNASSIGNED], config)
         rows = np.full((local.shape[0], len(frames)), UNASSIGNED, dtype=np.int64)
         for column, k in enumerate(range(start, step + 1)):
             rows[:, k] = index[column][local[:, column]]
         return rows, start
+
+
+def _confirmed(window: Sequence[np.ndarray], links: np.ndarray, config: GOAConfig) -> np.ndarray:
+    """The rows (B, len(window)) of the heads on ``links`` (k, 2) that GOA, run over the
+    window alone, gives a measurement in every frame: the steps of :func:`~seedtrack.tracking.goa.goa_pass` without
+    start or end, whose bookkeeping cost more than the steps on the few free points."""
+    if not links.shape[0]:
+        return np.empty((0, len(window)), np.int64)
+    state = HeadState.from_history(window, links, 0, 1)
+    columns = [links[:, 0], links[:, 1]]
+    for step in range(2, len(window)):
+        taken = assign_step(state, step, window[step], config)
+        state.advance(step, taken, window[step])
+        columns.append(taken)
+    local = np.column_stack(columns)
+    return local[(local != UNASSIGNED).all(axis=1)]
 
 
 @dataclass(frozen=True)
@@ -105,27 +120,35 @@ class EndTracks:
         back = (taken != UNASSIGNED) & (step - state.last_step > 1)
         if not (len(after) and back.any()):
             return taken
-        points = frames[step]
         gap = step - state.last_step[back]
-        bridge = (points[taken[back]] - state.last_xy[back]) / gap[:, None]
-        origin = points[taken[back]]
-        untracked = _continues(origin, -bridge, gap, [frames[step - 1][free[step - 1]]], config)
+        origin = frames[step][taken[back]]
+        bridge = (origin - state.last_xy[back]) / gap[:, None]
+        # The gate depends on the speed alone, the same backwards and forwards.
+        speed = np.hypot(*bridge.T)
+        radius = config.speed.reach(config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max))
+        undone = _continues(origin, -bridge, gap, radius, [frames[step - 1][free[step - 1]]], config)
+        if not undone.all():
+            undone |= ~_continues(origin, bridge, gap, radius, after, config)
         taken = taken.copy()
-        taken[np.flatnonzero(back)[~_continues(origin, bridge, gap, after, config) | untracked]] = UNASSIGNED
+        taken[np.flatnonzero(back)[undone]] = UNASSIGNED
         return taken
 
 
-def _continues(origin: np.ndarray, velocity: np.ndarray, span: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig) -> np.ndarray:
+def _continues(
+    origin: np.ndarray, velocity: np.ndarray, span: np.ndarray, radius: np.ndarray, after: Sequence[np.ndarray], config: GOAConfig
+) -> np.ndarray:
     """Boolean per origin: a measurement of one of the frames ``after`` (the next frames, in
-    order) continues ``velocity`` (gap-normalised over ``span`` frames) within phi_max, so a
-    point hidden again right after it reappears keeps its track."""
+    order) within ``radius`` per frame continues ``velocity`` (gap-normalised over ``span``
+    frames) within phi_max, so a point hidden again right after it reappears keeps its track."""
     found = np.zeros(origin.shape[0], bool)
-    speed = np.hypot(*velocity.T)
-    radius = config.speed.reach(config.individual.gate_radius(speed, np.ones(speed.size, bool), config.phi_max))
     for gap, points in enumerate(after, start=1):
         owner, target = pairs_within(origin, radius * gap, points)
+        if not owner.size:
+            continue
         pairs = Candidates(owner, target, points[target] - origin[owner], np.full(owner.size, gap), velocity[owner], span[owner])
         found[acceptable_links(config.individual, pairs, config.phi_max, config.speed)[0].head] = True
+        if found.all():
+            break
     return found
 
 
