@@ -28,7 +28,7 @@ from scipy.spatial import cKDTree
 from .assignment import UNASSIGNED, solve_dense, solve_split
 from .initialisation import first_links, pairs_within, shared_trees, tree_of
 from .motion import Candidates, CombinedModel, IndividualModel, SpeedLimits, acceptable_links
-from .mixture import add_chain_moments
+from .mixture import MixtureModel, add_chain_moments
 from .persistence import PersistentModel
 from .tracks import Tracks, canonical_order, check_limit, link_speed_limit, order_independent, point_frames, tracks_from_assignment
 
@@ -178,6 +178,10 @@ class HeadState:
     moments : ndarray of float, shape (m, 5), optional
         Each head's own history of velocity changes, for per-track motion states
         (:func:`seedtrack.tracking.mixture.add_chain_moments`); zeros when not given.
+    keeps_history : bool
+        Whether :meth:`advance` adds to ``moments``: only a model that reads them
+        (:class:`~seedtrack.tracking.mixture.MixtureModel`) needs it, and every other pass saves
+        the work on each step.
     """
 
     last_xy: np.ndarray
@@ -185,6 +189,7 @@ class HeadState:
     velocity: np.ndarray
     span: np.ndarray | None = None
     moments: np.ndarray | None = None
+    keeps_history: bool = True
 
     def __post_init__(self) -> None:
         if self.span is None:
@@ -210,14 +215,15 @@ class HeadState:
         had = held[seen]
         gap = step - before[seen]
         velocity = (new_xy[seen] - self.last_xy.take(had, axis=0)) / gap[:, None]
-        add_chain_moments(self.moments, had, self.velocity.take(had, axis=0), velocity, (gap == 1) & (self.span[had] == 1))
+        if self.keeps_history:
+            add_chain_moments(self.moments, had, self.velocity.take(had, axis=0), velocity, (gap == 1) & (self.span[had] == 1))
         self.velocity[had] = velocity
         self.span[had] = gap
         self.last_xy[held] = new_xy
         self.last_step[held] = step
 
     def __getitem__(self, rows: np.ndarray) -> "HeadState":
-        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows], self.moments.take(rows, axis=0))
+        return HeadState(self.last_xy.take(rows, axis=0), self.last_step[rows], self.velocity.take(rows, axis=0), self.span[rows], self.moments.take(rows, axis=0), self.keeps_history)
 
     def __setitem__(self, rows: np.ndarray, other: "HeadState") -> None:
         self.last_xy[rows], self.last_step[rows], self.velocity[rows], self.span[rows] = other.last_xy, other.last_step, other.velocity, other.span
@@ -301,8 +307,9 @@ class Heads:
     was copied once a step (bulk water, 240 frames: 8.7 s of linking's 66 s).
     """
 
-    def __init__(self, n_steps: int):
+    def __init__(self, n_steps: int, keeps_history: bool = True):
         self.count = 0
+        self.keeps_history = keeps_history
         self._buffers = (
             np.empty((0, n_steps), dtype=np.int64),  # assignment
             np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 2)), np.empty(0, np.int64), np.empty((0, 5)),  # state
@@ -315,7 +322,7 @@ class Heads:
     def _views(self) -> None:
         assignment, last_xy, last_step, velocity, span, moments, self.slaves, self.running, self.joins = (b[: self.count] for b in self._buffers)
         self.assignment = assignment
-        self.state = HeadState(last_xy, last_step, velocity, span, moments)
+        self.state = HeadState(last_xy, last_step, velocity, span, moments, self.keeps_history)
 
     def add(self, frames: Sequence[np.ndarray], rows: np.ndarray, start: int, until: int | np.ndarray) -> None:
         """Add heads whose measurements of steps ``start..until`` (one step, or one per head)
@@ -460,7 +467,7 @@ def _goa_pass(
 ) -> np.ndarray:
     n = len(frames)
     initial = np.asarray(initial, dtype=np.int64)
-    heads = Heads(n)
+    heads = Heads(n, keeps_history=isinstance(config.individual, MixtureModel))
     free = [np.ones(f.shape[0], bool) for f in frames]
     if initial.shape[0]:
         given = np.full(initial.shape[0], initial.shape[1]) if given is None else np.asarray(given, dtype=np.int64)
