@@ -127,7 +127,7 @@ def detect(
     >>> points.groupby("frame").size().tolist()
     [12, 12, 12]
     >>> list(points.columns)
-    ['frame', 'x', 'y', 'area', 'mean_intensity', 'eccentricity']
+    ['frame', 'x', 'y', 'area', 'mean_intensity', 'eccentricity', 'ep']
     """
     settings = _settings(DetectSettings, locals())
     return pd.DataFrame(detect_clip(source, settings, say=None).detections.to_rows())
