@@ -53,8 +53,9 @@ class Points:
     kept : dict of str to ndarray
         The input's other columns (as text when read from a file), one entry per row.
     localisation : float
-        The points' typical localisation error, pixels per axis: the median of the finite
-        values of an ``ep`` column (as ``detect`` writes it), 0 without one.
+        The points' typical localisation error, pixels per axis: the median of the values
+        of an ``ep`` column (as ``detect`` and trackpy write it; blank, NaN or negative: none
+        for that point), 0 without one.
     """
 
     frames: list[np.ndarray]
@@ -121,13 +122,13 @@ def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | N
 
 
 def _typical_error(values: np.ndarray, source) -> float:
-    """The median of the finite localisation errors of a column (text or numbers; blank or
-    NaN where a point has none), pixels per axis; 0 when none is finite.
+    """The median of the localisation errors of a column (text or numbers; blank, NaN or
+    negative where a point has none), pixels per axis; 0 when no point has one.
 
     Raises
     ------
     DataError
-        If a value is not a number, or negative.
+        If a value is not a number.
     """
     text = values.astype(str) if values.dtype.kind in "OUS" else None
     if text is not None:
@@ -136,14 +137,13 @@ def _typical_error(values: np.ndarray, source) -> float:
             errors = np.where(blank, "nan", text).astype(float)
         except ValueError:
             bad = next(k for k, value in enumerate(text) if not blank[k] and not _is_number(value))
-            raise DataError(source, f"line {bad + 2}: {LOCALISATION_COLUMN} {text[bad]!r} is not a number (a localisation error in pixels)") from None
+            raise DataError(source, f"line {bad + 2}: column {LOCALISATION_COLUMN} holds {str(text[bad])!r}, not a number (a localisation error, pixels)") from None
     else:
         errors = values.astype(float)
-    if (errors < 0).any():
-        bad = int(np.argmax(errors < 0))
-        raise DataError(source, f"line {bad + 2}: {LOCALISATION_COLUMN} {errors[bad]:g} is negative (a localisation error in pixels)")
-    finite = errors[np.isfinite(errors)]
-    return float(np.median(finite)) if finite.size else 0.0
+    # trackpy writes NaN, or a negative value where a spot's mass is below its background: no
+    # estimate for that point.
+    known = errors[np.isfinite(errors) & (errors >= 0)]
+    return float(np.median(known)) if known.size else 0.0
 
 
 def _is_number(text: str) -> bool:
