@@ -1,6 +1,7 @@
 """The detectors' localisation error estimate (``ep``) against the truth of generated frames.
 
-Run as ``python tests/benchmarks/bench_localisation.py [frames]``. Gaussian spots of known
+Run as ``python tests/benchmarks/bench_localisation.py [frames] [--write-docs]`` (``--write-docs``
+writes the table into ``docs/detection.md``). Gaussian spots of known
 sub-pixel centres (``seedtrack.data.spotfield``: sigma 1.5 px, Poisson noise on 10 photons a
 pixel plus read noise 1) at several signal-to-noise ratios, and generated dishes of seeds (the
 blob detector), each detected with the default choices as ``detect`` makes them; and the spots
@@ -16,7 +17,7 @@ shortfall under compression, and the noise at the spots' scale was taken instead
 
 from __future__ import annotations
 
-import sys
+import argparse
 
 import cv2
 import numpy as np
@@ -25,6 +26,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene
 from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.detection.clip import ClipDetector
 from seedtrack.tracking.metrics import match_frame
+from tables import write_table
 
 SNRS = (2, 2.5, 3, 4, 6, 10)
 TOLERANCE_PX = 2.0
@@ -52,22 +54,34 @@ def rms(values: list[np.ndarray]) -> float:
     return float(np.sqrt(np.mean(np.square(np.concatenate(values)))))
 
 
+HEADER = ["setting", "detections matched", "ep (RMS), px", "true RMS error per axis, px", "ratio", "Cramer-Rao bound, px"]
+
+
+def row(name: str, estimates: list[np.ndarray], errors: list[np.ndarray], bound: str = "") -> list[str]:
+    """One row of the table, printed as it is made."""
+    shown, true = rms(estimates), rms(errors)
+    cells = [name, str(sum(e.size for e in estimates)), f"{shown:.3f}", f"{true:.3f}", f"{shown / true:.2f}", bound]
+    print(f"{cells[0]:<30} {cells[1]:>7} {cells[2]:>9} {cells[3]:>9} {cells[4]:>6} {cells[5]:>6}")
+    return cells
+
+
 def main() -> None:
-    frames = int(sys.argv[1]) if len(sys.argv) > 1 else 4
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("frames", nargs="?", type=int, default=4, help="frames per setting (default 4)")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/detection.md, stamped")
+    args = parser.parse_args()
+    frames, rows = args.frames, []
     print(f"Gaussian spots, sigma 1.5 px, 200 per 512x512 frame, {frames} frames per SNR (seeds 2000..); single spots matched within {TOLERANCE_PX:g} px")
-    print(f"{'setting':<28} {'matched':>7} {'ep (RMS)':>9} {'true RMS':>9} {'ratio':>6} {'bound':>6}")
+    print(f"{'setting':<30} {'matched':>7} {'ep (RMS)':>9} {'true RMS':>9} {'ratio':>6} {'bound':>6}")
     for snr in SNRS:
         estimates, errors = [], []
         for k in range(frames):
             spec = SpotFieldSpec(snr=snr, random_seed=2000 + k)
             field = make_spot_field(spec)
-            found = ClipDetector(roi="none").detect(field.image)
-            estimate, error = matched(found, field.xy, field.kind == "single")
+            estimate, error = matched(ClipDetector(roi="none").detect(field.image), field.xy, field.kind == "single")
             estimates.append(estimate)
             errors.append(error)
-        shown, true = rms(estimates), rms(errors)
-        count = sum(e.size for e in estimates)
-        print(f"{'spots, SNR ' + str(snr):<28} {count:>7} {shown:>9.3f} {true:>9.3f} {shown / true:>6.2f} {cramer_rao_axis(spec):>6.3f}")
+        rows.append(row(f"spots, SNR {snr:g}", estimates, errors, f"{cramer_rao_axis(spec):.3f}"))
     for quality in (None, 90, 75):
         estimates, errors = [], []
         for k in range(frames):
@@ -78,9 +92,7 @@ def main() -> None:
             estimate, error = matched(ClipDetector(roi="none").detect(image), field.xy, field.kind == "single")
             estimates.append(estimate)
             errors.append(error)
-        shown, true = rms(estimates), rms(errors)
-        name = "spots, SNR 4, 8-bit" + (f", JPEG {quality}" if quality else "")
-        print(f"{name:<28} {sum(e.size for e in estimates):>7} {shown:>9.3f} {true:>9.3f} {shown / true:>6.2f} {'':>6}")
+        rows.append(row("spots, SNR 4, 8-bit" + (f", JPEG {quality}" if quality else ""), estimates, errors))
     for name, options in (("dish, 80 seeds", {}), ("dense dish, 200 seeds", dict(seeds=200, width=320, height=240, rim_speed=10.0, separation=7.0))):
         estimates, errors = [], []
         for seed in (100, 101):
@@ -91,9 +103,9 @@ def main() -> None:
                 estimate, error = matched(detector.detect(image), scene.truth.xy[shown, k], np.ones(shown.size, bool))
                 estimates.append(estimate)
                 errors.append(error)
-        shown, true = rms(estimates), rms(errors)
-        count = sum(e.size for e in estimates)
-        print(f"{name + ' (blobs)':<28} {count:>7} {shown:>9.3f} {true:>9.3f} {shown / true:>6.2f} {'':>6}")
+        rows.append(row(name + " (blobs)", estimates, errors))
+    if args.write_docs:
+        write_table("detection.md", "localisation-error", HEADER, rows)
 
 
 if __name__ == "__main__":

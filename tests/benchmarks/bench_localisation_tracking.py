@@ -1,6 +1,7 @@
 """What the detections' localisation error (``ep``) changes on tracking, in pairs.
 
-Run as ``python tests/benchmarks/bench_localisation_tracking.py [--runs N]``. Each clip is
+Run as ``python tests/benchmarks/bench_localisation_tracking.py [--runs N] [--write-docs]``
+(``--write-docs`` writes the table into ``docs/detection.md``). Each clip is
 detected once (``seedtrack run``'s detection, defaults), then its points are linked twice with
 ``run``'s defaults: without a localisation error (the motion noise floored only by the grid and
 0.1 px), and with the points' median ``ep`` as the floor (sqrt(6) ep on each velocity change), as
@@ -33,6 +34,7 @@ from seedtrack.pipeline import detect_clip
 from seedtrack.points import TrackingSettings, group_points, localised, track_frames
 from seedtrack.tracking.evaluation import evaluate_tracks
 from seedtrack.tracking.tracks import Tracks
+from tables import write_table
 
 TOLERANCE_PX = 1.0
 
@@ -75,43 +77,50 @@ def pair(source, truth: Tracks | None) -> tuple[float, list[tuple[float, float, 
     return points.localisation, results
 
 
-def line(name: str, ep: float, results: list[tuple[float, float, float]]) -> None:
-    (m0, i0, l0), (m1, i1, l1) = results
-    print(f"{name:<34} {ep:>6.3f} | {m0:>6.3f} {i0:>6.3f} {l0:>6.3f} | {m1:>6.3f} {i1:>6.3f} {l1:>6.3f}")
+HEADER = ["clip", "median ep, px", "without ep: strict merit / IDF1 / link error", "with ep"]
+
+
+def line(name: str, ep: float, results: list) -> list[str]:
+    """One row of the table, printed as it is made: scores, or (tracks, reproduced) pairs."""
+    cells = [f"{m:.3f} / {i:.3f} / {e:.3f}" for m, i, e in results] if isinstance(results[0][0], float) else [f"{t:,} tracks; {r} reproduced" for t, r in results]
+    print(f"{name:<40} {ep:>6.3f} | {cells[0]:<28} | {cells[1]}")
+    return [name, f"{ep:.3f}", *cells]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=2, help="Brownian clips per setting (seeds 1000..)")
     parser.add_argument("--no-bulk", action="store_true", help="leave out the bulk-water clip")
+    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/detection.md, stamped")
     args = parser.parse_args()
-    print(f"{'clip':<34} {'ep px':>6} | without ep: merit  IDF1  link err | with ep: merit  IDF1  link err")
+    rows = []
+    print(f"{'clip':<40} {'ep px':>6} | without ep: merit / IDF1 / link error | with ep")
     for snr, step in ((3, 0.3), (3, 1.0), (6, 0.3)):
         for run in range(args.runs):
             images, truth = brownian_spots(1000 + run, snr, step)
             ep, results = pair(images, truth)
-            line(f"spots SNR {snr}, step {step} px, seed {1000 + run}", ep, results)
+            rows.append(line(f"Brownian spots, SNR {snr}, step {step} px, seed {1000 + run}", ep, results))
     with tempfile.TemporaryDirectory() as folder:
         for name, spec in (("demo dish", DishSpec()), ("demo dish, hidden 0.1, 30 frames", DishSpec(hidden_probability=0.1, frames=30, random_seed=3))):
             scene = write_dish_clip(spec, Path(folder) / name)
             ep, results = pair(Path(folder) / name / "clip.mp4", scene.truth)
-            line(name, ep, results)
+            rows.append(line(name, ep, results))
     if not args.no_bulk:
         from bench_bulk_water import CLIP, confident_tracks, grey_frames, reproduced
 
         features, reference = confident_tracks(grey_frames(CLIP))
-        ep, (without, with_ep) = pair(CLIP, None)
         total = reference["particle"].nunique()
-        counts = [(tracks.n_tracks, reproduced(reference, tracks.to_rows())[0]) for tracks in (without, with_ep)]
-        print(f"bulk water, seedtrack's detections (ep {ep:.3f} px): tracks / confident trackpy tracks reproduced (of {total}): "
-              f"without ep {counts[0][0]} / {counts[0][1]}, with ep {counts[1][0]} / {counts[1][1]}")
+        ep, linked = pair(CLIP, None)
+        counts = [(tracks.n_tracks, reproduced(reference, tracks.to_rows())[0]) for tracks in linked]
+        rows.append(line(f"bulk water, `run`'s detections (of {total} confident)", ep, counts))
         # seedtrack.link on trackpy's own detections, whose ep is trackpy's estimate.
         counts = []
         for columns in (["frame", "x", "y"], ["frame", "x", "y", "ep"]):
-            linked = seedtrack.link(features[columns].reset_index(drop=True))
-            counts.append((linked["track_id"].nunique(), reproduced(reference, {name: linked[name].to_numpy() for name in ("frame", "x", "y", "track_id")})[0]))
-        print(f"bulk water, trackpy's detections (median ep {features['ep'].median():.3f} px), seedtrack.link: "
-              f"without ep {counts[0][0]} / {counts[0][1]}, with ep {counts[1][0]} / {counts[1][1]}")
+            tracks = seedtrack.link(features[columns].reset_index(drop=True))
+            counts.append((tracks["track_id"].nunique(), reproduced(reference, {name: tracks[name].to_numpy() for name in ("frame", "x", "y", "track_id")})[0]))
+        rows.append(line(f"bulk water, trackpy's detections and ep (of {total})", float(features["ep"].median()), counts))
+    if args.write_docs:
+        write_table("detection.md", "localisation-tracking", HEADER, rows)
 
 
 if __name__ == "__main__":
