@@ -17,7 +17,8 @@ from seedtrack.data.psmg import PSMGSpec, generate_psmg
 from seedtrack.data.spotfield import SpotFieldSpec, make_spot_field
 from seedtrack.detection.blobs import BlobOptions, detect_blobs
 from seedtrack.detection.clip import ClipDetector
-from seedtrack.points import group_points
+from seedtrack.points import group_points, link_points
+from seedtrack.settings import LinkSettings
 from seedtrack.tracking.metrics import match_frame
 
 
@@ -87,6 +88,11 @@ def test_a_points_table_with_ep_floors_the_motion_noise_it_is_linked_with():
     assert _noise_line(floored.attrs["motion"]) >= round(np.sqrt(6) * 0.5, 2)
     assert plain["track_id"].nunique() == floored["track_id"].nunique() == 15
     assert (floored["ep"] == 0.5).all()
+    # --verbose says where the floor came from.
+    said: list[str] = []
+    table = {name: points[name].to_numpy() for name in points.columns} | {"ep": np.full(len(points), 0.5)}
+    link_points(group_points(table, "points"), LinkSettings(), say=said.append, verbose=True)
+    assert "  localisation error of the points 0.500 px per axis: noise at least 1.22 px/frame" in said
 
 
 def test_the_ep_column_goes_from_detect_through_track(tmp_path):
