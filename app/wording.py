@@ -49,7 +49,7 @@ def motion_lines(fit, verbose: bool = False) -> list[str]:
     if fit.measured is not None and config.localisation_error > 0:
         # A given (or measured by the detector) localisation error floors the noise: said, so
         # that a noise printed at the floor is not read as the motion's.
-        details.append(f"  localisation error of the points {config.localisation_error:.3f} px per axis: noise at least {math.sqrt(6.0) * config.localisation_error:.2f} px/frame")
+        details.append(f"  localisation error of the points {config.localisation_error:.3f} px per axis: the noise is never fitted below sqrt(6) x that, {math.sqrt(6.0) * config.localisation_error:.2f} px/frame")
     return [line, *details] if verbose else [line]
 
 

@@ -92,7 +92,7 @@ def test_a_points_table_with_ep_floors_the_motion_noise_it_is_linked_with():
     said: list[str] = []
     table = {name: points[name].to_numpy() for name in points.columns} | {"ep": np.full(len(points), 0.5)}
     link_points(group_points(table, "points"), LinkSettings(), say=said.append, verbose=True)
-    assert "  localisation error of the points 0.500 px per axis: noise at least 1.22 px/frame" in said
+    assert "  localisation error of the points 0.500 px per axis: the noise is never fitted below sqrt(6) x that, 1.22 px/frame" in said
 
 
 def test_the_ep_column_goes_from_detect_through_track(tmp_path):
