@@ -112,7 +112,8 @@ def detect(
     DataFrame
         One row per object: ``frame`` (0-based index in the source), ``x``, ``y`` (pixels),
         ``area`` (pixels), ``mean_intensity`` (0-255), ``eccentricity`` (0 round, towards 1
-        elongated); the columns of detections.csv.
+        elongated), ``ep`` (the centre's localisation error, pixels per axis); the columns of
+        detections.csv.
 
     See Also
     --------
@@ -127,7 +128,7 @@ def detect(
     >>> points.groupby("frame").size().tolist()
     [12, 12, 12]
     >>> list(points.columns)
-    ['frame', 'x', 'y', 'area', 'mean_intensity', 'eccentricity']
+    ['frame', 'x', 'y', 'area', 'mean_intensity', 'eccentricity', 'ep']
     """
     settings = _settings(DetectSettings, locals())
     return pd.DataFrame(detect_clip(source, settings, say=None).detections.to_rows())
@@ -155,7 +156,9 @@ def link(
     points : DataFrame
         Columns ``frame`` (0-based, whole numbers), ``x``, ``y`` (pixels), any others; row order
         does not matter. Frame numbers all N apart are consecutive measurements (speeds per N
-        frames), as in the command.
+        frames), as in the command. An ``ep`` column (each point's localisation error, pixels
+        per axis, as :func:`detect` and trackpy give it) floors the measured motion's noise at
+        sqrt(6) times its median.
     algorithm : str
         "goa-updown" (tracks open and end anywhere), "goa-updown-fixed" (the paper's fixed count
         of tracks), "goa" (one forward pass), or a comparison tracker "nn", "ss", "rs", "ipan".

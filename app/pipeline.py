@@ -43,7 +43,7 @@ from seedtrack.tracking.tracks import Tracks
 
 from .errors import OptionError, UsageError
 from .outputs import refuse_replacing_inputs
-from .points import TrackingSettings, group_points, track_frames
+from .points import TrackingSettings, group_points, localised, track_frames
 from .parallel import VideoEncoder, read_ahead, threaded_map
 from .drawing import FalseDetections, TrackLayer, View, annotate, track_legend
 from .progress import progress_bar
@@ -521,7 +521,8 @@ def run_pipeline(
         # The encoder's process starts, and the overlay's frames decode, beside tracking, which
         # runs on one core.
         with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET, PREVIEW_CRF) as encoder, _overlay_frames(clip, detection, workers) as frames:
-            tracks = track_frames(group_points(rows, clip, detections.frame_indices).frames, tracking, verbose=verbose)
+            points = group_points(rows, clip, detections.frame_indices)
+            tracks = track_frames(points.frames, localised(tracking, points), verbose=verbose)
             write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)
             _render(frames, tracks, detections, encoder, TRAIL, workers)
     return detections, tracks

@@ -26,9 +26,11 @@ from .wording import motion_lines
 if TYPE_CHECKING:
     from .settings import LinkSettings
 
-__all__ = ["POINT_COLUMNS", "Points", "TrackingSettings", "group_points", "point_rows", "track_rows", "track_frames", "link_points", "given_first_links"]
+__all__ = ["POINT_COLUMNS", "LOCALISATION_COLUMN", "Points", "localised", "TrackingSettings", "group_points", "point_rows", "track_rows", "track_frames", "link_points", "given_first_links"]
 
 POINT_COLUMNS = ("frame", "x", "y")
+# Each point's localisation error, pixels per axis, as `detect` writes it (trackpy's name).
+LOCALISATION_COLUMN = "ep"
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,10 @@ class Points:
         Position in ``order`` of each frame's first point.
     kept : dict of str to ndarray
         The input's other columns (as text when read from a file), one entry per row.
+    localisation : float
+        The points' typical localisation error, pixels per axis: the median of the values
+        of an ``ep`` column (as ``detect`` and trackpy write it; blank, NaN or negative: none
+        for that point), 0 without one.
     """
 
     frames: list[np.ndarray]
@@ -58,6 +64,7 @@ class Points:
     order: np.ndarray
     offset: np.ndarray
     kept: dict[str, np.ndarray]
+    localisation: float = 0.0
 
 
 def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | None = None) -> Points:
@@ -110,7 +117,41 @@ def group_points(table: dict[str, np.ndarray], source, processed: np.ndarray | N
     xy = np.column_stack((x, y))[order]
     frames = [xy[start:end] for start, end in zip(offset[:-1], offset[1:])]
     kept = {name: values for name, values in table.items() if name not in POINT_COLUMNS + TRACK_COLUMNS}
-    return Points(frames, first, step, order, offset[:-1], kept)
+    localisation = _typical_error(kept[LOCALISATION_COLUMN], source) if LOCALISATION_COLUMN in kept else 0.0
+    return Points(frames, first, step, order, offset[:-1], kept, localisation)
+
+
+def _typical_error(values: np.ndarray, source) -> float:
+    """The median of the localisation errors of a column (text or numbers; blank, NaN or
+    negative where a point has none), pixels per axis; 0 when no point has one.
+
+    Raises
+    ------
+    DataError
+        If a value is not a number.
+    """
+    text = values.astype(str) if values.dtype.kind in "OUS" else None
+    if text is not None:
+        blank = np.char.strip(text) == ""
+        try:
+            errors = np.where(blank, "nan", text).astype(float)
+        except ValueError:
+            bad = next(k for k, value in enumerate(text) if not blank[k] and not _is_number(value))
+            raise DataError(source, f"line {bad + 2}: column {LOCALISATION_COLUMN} holds {str(text[bad])!r}, not a number (a localisation error, pixels)") from None
+    else:
+        errors = values.astype(float)
+    # trackpy writes NaN, or a negative value where a spot's mass is below its background: no
+    # estimate for that point.
+    known = errors[np.isfinite(errors) & (errors >= 0)]
+    return float(np.median(known)) if known.size else 0.0
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def point_rows(points: Points, tracks: Tracks) -> tuple[dict[str, np.ndarray], np.ndarray]:
@@ -253,10 +294,26 @@ def link_points(points: Points, settings: LinkSettings, say: Callable[[str], Non
     >>> link_points(group_points(table, "points"), LinkSettings(algorithm="nn", max_speed=3.0), say=None).n_tracks
     2
     """
-    tracking = settings.tracking()
+    tracking = localised(settings.tracking(), points)
     if settings.first_links_file is not None:
         tracking = replace(tracking, first_links=given_first_links(settings.first_links_file, points))
     return track_frames(points.frames, tracking, points.first_frame, say, verbose)
+
+
+def localised(settings: TrackingSettings, points: Points) -> TrackingSettings:
+    """``settings`` with the points' localisation error (:attr:`Points.localisation`) as the
+    floor of the motion noise (:attr:`seedtrack.tracking.goa.GOAConfig.localisation_error`),
+    where it is larger than the one given.
+
+    Examples
+    --------
+    >>> table = {"frame": np.array([0, 1]), "x": np.array([0.0, 1.0]), "y": np.zeros(2), "ep": np.array(["0.25", "0.35"])}
+    >>> localised(TrackingSettings(), group_points(table, "points")).config.localisation_error
+    0.3
+    """
+    if points.localisation <= settings.config.localisation_error:
+        return settings
+    return replace(settings, config=replace(settings.config, localisation_error=points.localisation))
 
 
 # A given first link's point must lie this close to a measured point, pixels.

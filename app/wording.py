@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 
 
@@ -45,6 +46,10 @@ def motion_lines(fit, verbose: bool = False) -> list[str]:
         verdict = re.split(r"[:;,]", fit.choice.reason, maxsplit=1)[0]
         line = f"motion: {verdict}, tracked with {config.individual.name.upper()}, {limit}" + (f" about the {drift}" if drift else "")
         details = [f"  {fit.choice.reason}"]
+    if fit.measured is not None and config.localisation_error > 0:
+        # A given (or measured by the detector) localisation error floors the noise: said, so
+        # that a noise printed at the floor is not read as the motion's.
+        details.append(f"  localisation error of the points {config.localisation_error:.3f} px per axis: the noise is never fitted below sqrt(6) x that, {math.sqrt(6.0) * config.localisation_error:.2f} px/frame")
     return [line, *details] if verbose else [line]
 
 

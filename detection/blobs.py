@@ -16,10 +16,11 @@ import numpy as np
 
 from seedtrack.data.depth import to_uint8, value_range
 
-from .background import contrast_histogram, flat_background, local_background, noise_floor, otsu_above
+from .background import NOISE_FLOOR_SIGMAS, contrast_histogram, flat_background, local_background, noise_floor, otsu_above
+from .localisation import centroid_error
 from .split import split_touching
 
-MEASUREMENT_COLUMNS = ("x", "y", "area", "mean_intensity", "eccentricity")
+MEASUREMENT_COLUMNS = ("x", "y", "area", "mean_intensity", "eccentricity", "ep")
 POLARITIES = ("dark", "light", "auto")
 BACKGROUNDS = ("local", "none", "temporal")
 THRESHOLD_METHODS = ("otsu", "adaptive")
@@ -208,8 +209,10 @@ def detect_blobs(
         ``x``, ``y``: contrast-weighted centroid, pixels (x to the right, y down, pixel
         centres at integer coordinates); ``area``: pixels in the blob; ``mean_intensity``:
         mean grey level (0-255) of the blob; ``eccentricity``: of the ellipse with the blob's
-        second moments (0 round, towards 1 elongated). Sorted by y, then x. Empty arrays when
-        the frame holds no blob.
+        second moments (0 round, towards 1 elongated); ``ep``: the centroid's localisation
+        error from the contrast's noise, pixels per axis
+        (:func:`seedtrack.detection.localisation.centroid_error`). Sorted by y, then x. Empty
+        arrays when the frame holds no blob.
     """
     gray = to_gray(image)
     _check_roi(roi, gray)
@@ -221,7 +224,8 @@ def detect_blobs(
         return _empty()
     part = np.s_[top:bottom, left:right]
     signal = contrast(gray, options, background, roi, part)
-    level = _level(signal, options.threshold, options.background_size, roi[part] if roi is not None else None)
+    histogram = contrast_histogram(signal, roi[part] if roi is not None else None)
+    level = _level(signal, options.threshold, options.background_size, histogram)
     mask = np.greater(signal, level) if np.ndim(level) else cv2.threshold(signal, level, 1, cv2.THRESH_BINARY)[1].view(bool)
     within = np.flatnonzero(mask)
     if within.size == 0:
@@ -233,7 +237,8 @@ def detect_blobs(
     inside = (rows + top) * gray.shape[1] + columns + left
     if options.split:
         label, count = split_touching(label, count, inside, gray.shape, weight, _area_limits(options, gray.size))
-    return _measure(label, count, inside, weight, gray, _area_limits(options, gray.size))
+    noise = noise_floor(histogram) / NOISE_FLOOR_SIGMAS
+    return _measure(label, count, inside, weight, gray, _area_limits(options, gray.size), noise)
 
 
 def _check_roi(roi: np.ndarray | None, gray: np.ndarray) -> None:
@@ -249,11 +254,11 @@ def _inner_box(roi: np.ndarray, roi_box: tuple[int, int, int, int] | None) -> tu
     return y - y % 2, x - x % 2, y + height, x + width
 
 
-def _level(signal: np.ndarray, threshold: str | float, window: float, roi: np.ndarray | None) -> float | np.ndarray:
-    """Contrast above which a pixel is an object pixel: a number, or a per-pixel map."""
+def _level(signal: np.ndarray, threshold: str | float, window: float, histogram: np.ndarray) -> float | np.ndarray:
+    """Contrast above which a pixel is an object pixel: a number, or a per-pixel map
+    (``histogram``: :func:`~seedtrack.detection.background.contrast_histogram` of ``signal``)."""
     if not isinstance(threshold, str):
         return float(threshold)
-    histogram = contrast_histogram(signal, roi)
     floor = noise_floor(histogram)
     if threshold == "otsu":
         return otsu_above(histogram, floor)
@@ -273,9 +278,10 @@ def _area_limits(options: BlobOptions, frame_pixels: int) -> tuple[float, float]
 
 
 def _measure(
-    label: np.ndarray, count: int, inside: np.ndarray, weight: np.ndarray, gray: np.ndarray, limits: tuple[float, float]
+    label: np.ndarray, count: int, inside: np.ndarray, weight: np.ndarray, gray: np.ndarray, limits: tuple[float, float], noise: float
 ) -> dict[str, np.ndarray]:
-    """Per-blob measurements from the object pixels' labels (label 0 is never used)."""
+    """Per-blob measurements from the object pixels' labels (label 0 is never used); ``noise``
+    is the contrast's noise standard deviation, grey levels."""
     area = np.bincount(label, minlength=count)[1:].astype(float)
     keep = (area >= limits[0]) & (area <= limits[1])
     if not keep.any():
@@ -295,7 +301,8 @@ def _measure(
     sxx = total(columns * columns.astype(float)) / area - cx * cx
     syy = total(rows * rows.astype(float)) / area - cy * cy
     sxy = total(columns * rows.astype(float)) / area - cx * cy
-    table = {"x": x, "y": y, "area": area, "mean_intensity": intensity, "eccentricity": eccentricity(sxx, syy, sxy)}
+    error = centroid_error({"mass": mass, "area": area, "x": x, "y": y, "cx": cx, "cy": cy, "sxx": sxx, "syy": syy}, noise)
+    table = {"x": x, "y": y, "area": area, "mean_intensity": intensity, "eccentricity": eccentricity(sxx, syy, sxy), "ep": error}
     order = np.lexsort((table["x"], table["y"]))
     return {name: values[order] for name, values in table.items()}
 

@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .blobs import MEASUREMENT_COLUMNS, eccentricity
+from .localisation import windowed_centroid_error
 from .structure import background_of
 
 # Standard deviation of the Gaussian that takes off pixel noise, pixels (Crocker and Grier's
@@ -57,6 +58,9 @@ _FALSE_SPOTS_PER_PIXEL = 1e-5
 _FALSE_SHARE = 0.01
 _CALIBRATION_SIZE = 1024
 _CALIBRATION_SEED = 16
+# Zero is the dark level of data whose background stands more than this many noise deviations
+# above it (a Poisson background of at least one photon a pixel).
+_DARK_LEVEL_SIGMAS = 1.0
 # Immerkaer's noise filter: the difference of two discrete Laplacians.
 _IMMERKAER = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 # A pixel less the mean of its 8 neighbours: takes off smooth light like Immerkaer's filter but
@@ -130,6 +134,12 @@ class SpotSettings:
     unusual : str
         Why the first frame's count or background is unusual for the spot detector, in words;
         "" when it is not.
+    noise : float
+        Standard deviation of a raw pixel's noise, data units, for each spot's localisation
+        error (``ep``); 0: measured on each frame.
+    gain : float
+        Data units per photon of the spots' own light (:func:`shot_gain`), whose shot noise
+        adds to the localisation error; 0: none counted.
     """
 
     diameter: int
@@ -139,6 +149,8 @@ class SpotSettings:
     standing: float = np.inf
     background_mass: float = 0.0
     unusual: str = ""
+    noise: float = 0.0
+    gain: float = 0.0
 
     def __post_init__(self) -> None:
         if int(self.diameter) != self.diameter or self.diameter < 3 or self.diameter % 2 == 0:
@@ -147,6 +159,8 @@ class SpotSettings:
             raise ValueError(f"min_mass must be finite and >= 0, got {self.min_mass:g}")
         if not np.isfinite(self.floor) or self.floor < 0:
             raise ValueError(f"floor must be finite and >= 0, got {self.floor:g}")
+        if not (np.isfinite(self.noise) and self.noise >= 0 and np.isfinite(self.gain) and self.gain >= 0):
+            raise ValueError(f"noise and gain must be finite and >= 0, got {self.noise:g}, {self.gain:g}")
         if np.isnan(self.standing) or self.standing < 0:
             raise ValueError(f"standing must be >= 0, got {self.standing:g}")
         if self.polarity not in ("dark", "light"):
@@ -271,6 +285,51 @@ def pixel_noise(gray: np.ndarray, roi: np.ndarray | None = None) -> float:
     return sigma
 
 
+def band_noise(gray: np.ndarray, diameter: int, polarity: str = "light", roi: np.ndarray | None = None) -> float:
+    """The band-passed frame's noise (:func:`band_pass`), data units: the spread of its values
+    about their median (the median absolute deviation, in standard deviations, so that spots,
+    a small share of the pixels, hardly count).
+
+    This is the noise at the scale a spot's centroid sees it. Compression takes off the fine,
+    pixel-to-pixel noise that :func:`pixel_noise` reads, and keeps the coarser noise that moves
+    centroids: through JPEG at quality 75, spots whose centres were off by 0.17 px were given
+    0.03 px from the pixel noise.
+
+    Example
+    -------
+    >>> rng = np.random.default_rng(0)
+    >>> round(band_noise(rng.normal(100, 4, (200, 200)), 9) / band_noise(rng.normal(100, 1, (200, 200)), 9), 1)
+    4.0
+    """
+    values = band_pass(gray, diameter, polarity)
+    if roi is not None:
+        values = values[roi > 0]
+    if values.size == 0:
+        return 0.0
+    return float(_MAD_TO_SIGMA * np.median(np.abs(values - np.median(values))))
+
+
+def shot_gain(gray: np.ndarray, noise: float, polarity: str, roi: np.ndarray | None = None) -> float:
+    """Data units per photon, at most: the background's noise variance over its level, as if
+    all of it were the shot noise of light counted from zero (a camera's offset or read noise
+    make the true gain smaller). 0 for dark spots (less light, less shot noise than around
+    them) and where zero is not the dark level (the background within one noise deviation of
+    it: a background taken off, signed data).
+
+    Example
+    -------
+    >>> rng = np.random.default_rng(0)
+    >>> frame = rng.poisson(40.0, (200, 200)).astype(np.float32) * 2.5   # 2.5 units a photon
+    >>> round(shot_gain(frame, pixel_noise(frame), "light"), 1)
+    2.5
+    """
+    if polarity != "light":
+        return 0.0
+    values = np.asarray(gray)[::4, ::4] if roi is None else np.asarray(gray)[::4, ::4][roi[::4, ::4] > 0]
+    level = float(np.median(values)) if values.size else 0.0
+    return noise * noise / level if level > _DARK_LEVEL_SIGMAS * noise else 0.0
+
+
 def _noisiest_level(gray: np.ndarray, roi: np.ndarray | None) -> float:
     """Immerkaer's noise level over squares of :data:`_NOISE_TILE` pixels, the 90th percentile."""
     residual = np.abs(cv2.filter2D(np.asarray(gray, np.float32), -1, _IMMERKAER)) * np.float32(np.sqrt(np.pi / 2) / 6)
@@ -363,7 +422,7 @@ def _unit_noise_levels(diameter: int, skewness: float = 0.0) -> tuple[float, flo
     noise = _unit_noise((_CALIBRATION_SIZE, _CALIBRATION_SIZE), skewness)
     band, smooth = _band_and_smooth(noise, diameter, "light")
     floor = float(np.std(band[diameter:-diameter, diameter:-diameter]))
-    found = detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor))
+    found = detect_spots(noise, SpotSettings(diameter, 0.0, "light", floor), localise=False)
     masses = np.sort(found["mass"])[::-1]
     least = float(masses[int(_FALSE_SPOTS_PER_PIXEL * noise.size)])
     rows, columns = np.round(found["y"]).astype(int), np.round(found["x"]).astype(int)
@@ -552,7 +611,9 @@ def fit_spot_settings(
     """The clip's spot settings from one frame.
 
     The diameter is estimated (:func:`spot_shape`) unless given. The noise's level and skewness
-    are measured (:func:`pixel_noise`, :func:`noise_skewness`). The floor is the band-passed
+    are measured (:func:`pixel_noise`, :func:`noise_skewness`); for the spots' localisation
+    error, the noise is also read at the spots' scale (:func:`band_noise`, as the white noise
+    that band-passes to it), which compression keeps, and the larger taken. The floor is the band-passed
     level of white noise of that level; the least mass is the mass at which white noise of that
     skewness, at the level of the noisiest tenth of the frame (squares of 32 px), makes one false
     spot per 10^5 pixels (about 3 in a 640 x 512 frame), or one per hundred of the spots this
@@ -588,11 +649,15 @@ def fit_spot_settings(
     strongest = max(sigma, _noisiest_level(gray, roi))
     signal = np.asarray(gray, np.float32) if polarity == "light" else -np.asarray(gray, np.float32)
     floor, mass, tail, median, standing = _unit_noise_levels(int(diameter), noise_skewness(signal, roi))
-    settings = SpotSettings(diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma, standing=standing * strongest)
+    noise = max(sigma, band_noise(gray, int(diameter), polarity, roi) / floor)
+    settings = SpotSettings(
+        diameter=int(diameter), min_mass=mass * strongest, polarity=polarity, floor=floor * sigma, standing=standing * strongest,
+        noise=noise, gain=shot_gain(gray, sigma, polarity, roi),
+    )
     pixels = int(np.count_nonzero(roi)) if roi is not None else np.asarray(gray).shape[0] * np.asarray(gray).shape[1]
     # Every candidate's mass: a spot's is decided by heavier ones only, so those above the least
     # mass are the spots the least mass finds.
-    candidates = detect_spots(gray, replace(settings, min_mass=0.0), roi=roi)["mass"]
+    candidates = detect_spots(gray, replace(settings, min_mass=0.0), roi=roi, localise=False)["mass"]
     spots = int(np.count_nonzero(candidates > settings.min_mass))
     allowed = _FALSE_SHARE * spots / max(pixels, 1)
     if 0 < allowed < _FALSE_SPOTS_PER_PIXEL:
@@ -618,7 +683,7 @@ def fit_spot_settings(
 
 
 def detect_spots(
-    image: np.ndarray, settings: SpotSettings, *, roi: np.ndarray | None = None, background: np.ndarray | None = None
+    image: np.ndarray, settings: SpotSettings, *, roi: np.ndarray | None = None, background: np.ndarray | None = None, localise: bool = True
 ) -> dict[str, np.ndarray]:
     """Find spots in one frame and measure them (Crocker and Grier).
 
@@ -633,6 +698,8 @@ def detect_spots(
     background : ndarray, shape (H, W), optional
         A static scene's background (the median over time) to take off first: what never
         moves is then no spot.
+    localise : bool
+        Measure each spot's localisation error (``ep``; NaN when not).
 
     Returns
     -------
@@ -641,7 +708,9 @@ def detect_spots(
         pixel centres at integer coordinates); ``area``: pixels of the disc that are brighter
         than the background; ``mean_intensity``: mean grey level of those pixels, in the data's
         units; ``eccentricity``: of the brightness's second moments (0 round); ``mass``: the
-        integrated brightness, data units times pixels. Sorted by y, then x.
+        integrated brightness, data units times pixels; ``ep``: the centre's localisation error,
+        pixels per axis (:func:`seedtrack.detection.localisation.windowed_centroid_error`, with
+        ``settings.noise`` and ``settings.gain``). Sorted by y, then x.
 
     Example
     -------
@@ -687,24 +756,31 @@ def detect_spots(
     rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
     # A spot is lighter than the wide background around it, not only than the running mean
     # over its diameter, which a dark ring pulls down into a light halo about it.
-    standing = smooth[rows, columns] - _wide_background(smooth, diameter, rows, columns)
+    wide = _wide_background(smooth, diameter, rows, columns)
+    standing = smooth[rows, columns] - wide
     keep = standing > _STANDING_FLOORS * settings.floor
-    rows, columns, mass, weights = rows[keep], columns[keep], mass[keep], weights[keep]
+    rows, columns, mass, weights, wide = rows[keep], columns[keep], mass[keep], weights[keep], wide[keep]
     if rows.size == 0:
         return _empty()
-    ox, oy = _centroid(weights, dx, dy, window)
+    ox, oy, own = _centroid(weights, dx, dy, window)
     x, y = columns + ox, rows + oy
     x, y, order = _without_duplicates(x, y, mass, radius, standing[keep] > settings.standing)
     weights, rows, columns = weights[order], rows[order], columns[order]
+    # The frame's values over each disc, the edge pixels repeated beyond the frame (the border
+    # makes one flat look-up of what would be clipped row and column indices).
+    edged = cv2.copyMakeBorder(gray, radius, radius, radius, radius, cv2.BORDER_REPLICATE)
+    raw = edged.ravel()[(rows * edged.shape[1] + columns)[:, None] + (dy + radius) * edged.shape[1] + dx + radius]
+    if localise:
+        noise = settings.noise if settings.noise > 0 else pixel_noise(gray, roi)
+        above = (raw if settings.polarity == "light" else -raw) - wide[order, None]
+        error = windowed_centroid_error(weights, above, dx, dy, ox[order], oy[order], own[order], _NOISE_SIGMA_PX, noise, settings.gain)
+    else:
+        error = np.full(rows.size, np.nan)
     ex, ey = dx[None, :] - ox[order, None], dy[None, :] - oy[order, None]
     total = mass[order]
     sxx, syy, sxy = ((weights * e).sum(axis=1) / total for e in (ex * ex, ey * ey, ex * ey))
     lit = weights > 0
     area = lit.sum(axis=1).astype(float)
-    # The frame's values over each disc, the edge pixels repeated beyond the frame (the border
-    # makes one flat look-up of what would be clipped row and column indices).
-    edged = cv2.copyMakeBorder(gray, radius, radius, radius, radius, cv2.BORDER_REPLICATE)
-    raw = edged.ravel()[(rows * edged.shape[1] + columns)[:, None] + (dy + radius) * edged.shape[1] + dx + radius]
     intensity = np.where(lit, raw, 0).sum(axis=1) / np.maximum(area, 1)
     table = {
         "x": x,
@@ -713,13 +789,15 @@ def detect_spots(
         "mean_intensity": intensity.astype(float),
         "eccentricity": eccentricity(sxx, syy, sxy),
         "mass": total.astype(float),
+        "ep": error,
     }
     order = np.lexsort((table["x"], table["y"]))
     return {name: values[order] for name, values in table.items()}
 
 
-def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
-    """Brightness centroid of each disc (offsets from its centre, pixels), each pixel's light
+def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Brightness centroid of each disc (offsets from its centre, pixels) and the window it
+    ends with (standard deviation, pixels), each pixel's light
     weighted by a Gaussian window about the estimate, iterated from the disc's centre towards a
     fixed point.
 
@@ -769,7 +847,7 @@ def _centroid(weights: np.ndarray, dx: np.ndarray, dy: np.ndarray, window: float
         total, sx, sy = (windowed @ first).T
         total = np.maximum(total, np.float32(1e-30))
         ox, oy = sx / total, sy / total
-    return ox.astype(float), oy.astype(float)
+    return ox.astype(float), oy.astype(float), own.astype(float)
 
 
 def _refine(
@@ -858,4 +936,4 @@ def _without_duplicates(
 
 
 def _empty() -> dict[str, np.ndarray]:
-    return {name: np.empty(0) for name in (*MEASUREMENT_COLUMNS, "mass")}
+    return {name: np.empty(0) for name in (*MEASUREMENT_COLUMNS, "mass", "ep")}

@@ -17,7 +17,7 @@ from seedtrack.data.dish import DishSpec, make_dish_scene, write_dish_clip
 from seedtrack.data.video import write_video
 from seedtrack.tracking.metrics import match_frame
 
-COLUMNS = ["frame", "x", "y", "area", "mean_intensity", "eccentricity"]
+COLUMNS = ["frame", "x", "y", "area", "mean_intensity", "eccentricity", "ep"]
 SPEC = DishSpec(seeds=30, frames=4, width=320, height=240, rim_speed=15.0, random_seed=7, touching_pairs=3, rim=True, glare_spots=2, dust_specks=8)
 
 

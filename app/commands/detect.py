@@ -172,7 +172,8 @@ def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "detect",
         description="Find objects in every frame of INPUT and write OUT (CSV: frame,x,y,area,mean_intensity,"
-        "eccentricity; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates). "
+        "eccentricity,ep; 0-based frames, pixels, x right and y down, pixel centres at integer coordinates; "
+        "ep each centre's localisation error, pixels per axis, which track and run take as the floor of the motion's noise). "
         "--preview draws what was found and the region of interest on one frame.",
     )
     parser.add_argument("input", type=Path, metavar="INPUT", help=CLIP_INPUT_HELP)

@@ -25,7 +25,9 @@ Link the points of POINTS.csv (columns frame,x,y in pixels, 0-based frames; any 
 kept) into tracks and write tracks.csv with columns track_id,frame,x,y,interpolated followed by the
 kept columns. A measured row carries its point's kept values unchanged; a row with interpolated=1 is
 a position filled in for a missed point (a bound slave) and leaves them blank. Input columns named
-track_id or interpolated are not kept.
+track_id or interpolated are not kept. A column ep (each point's localisation error, pixels per
+axis, as detect writes it and trackpy names it; blank, NaN or negative for none) sets the least
+noise of the measured motion: sqrt(6) times its median, what such errors put on a velocity change.
 
 Frame numbers are the input's. A frame number missing between the first and the last is a frame in
 which nothing was measured: speeds are per frame number, and tracks bridge it with interpolated
