@@ -244,6 +244,9 @@ def first_links(
     velocity = np.take(frames[1], measurement, axis=0) - np.take(frames[0], head, axis=0)
     valid = limits.admits(velocity)
     head, measurement = head[valid], measurement[valid]
+    if not head.size:
+        # Nothing to score: most windows in which tracks may open hold no link.
+        return head, measurement, np.empty(0)
     # A model measured on the data brings its own speed scale, so that a speed limit only
     # removes candidates and does not reweigh the rest (seedtrack.tracking.adaptive).
     scale = getattr(link_model, "speed_scale", None) or limits.scale(velocity[valid])
@@ -269,11 +272,7 @@ def first_links(
         # A smooth continuation lies near the straight-line prediction, so each link looks at
         # the points nearest to it (exact gating by IM2 alone would reach far for fast links).
         k = min(_CONTINUATIONS, frames[step + 1].shape[0])
-        if k and origin.size:
-            _, nearest_next = tree_of(frames[step + 1]).query(middle + move, k=k)
-            point_out = np.asarray(nearest_next).reshape(-1, k).ravel()
-        else:
-            point_out = np.empty(0, np.int64)
+        point_out = _nearest(frames[step + 1], middle + move, k) if k and origin.size else np.empty(0, np.int64)
         link_in = np.repeat(np.arange(origin.size), k)
         middle_index = target[link_in]
         next_velocity = np.take(frames[step + 1], point_out, axis=0) - middle.take(link_in, axis=0)
@@ -308,6 +307,16 @@ def first_links(
     # pruning a link at the limit.
     cost = (1 - _NEAREST_SHARE) * to_go / len(triplets) + _NEAREST_SHARE * nearest
     return head, measurement, np.minimum(cost, phi_max)
+
+
+def _nearest(points: np.ndarray, centres: np.ndarray, k: int) -> np.ndarray:
+    """The ``k`` nearest of ``points`` to each centre, pixels, as ``k`` indices a centre (row
+    after row; in no set order within a row): the set a KD-tree query gives, which is all that
+    the paths use. A frame of ``k`` points (windows of free points often are) needs no tree."""
+    if k == points.shape[0]:
+        return np.tile(np.arange(k), centres.shape[0])
+    _, index = tree_of(points).query(centres, k=k)
+    return np.asarray(index).reshape(-1, k).ravel()
 
 
 def _first_candidates(
