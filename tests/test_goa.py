@@ -171,11 +171,12 @@ def test_given_heads_keep_their_columns_and_the_others_are_associated_around_the
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("n", [15, 300, 1500])
-def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed, n):
+@pytest.mark.parametrize("layout", ["square", "line", "one spot"])
+def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed, n, layout):
     # Integer positions and radii put points exactly on the circles (3-4-5 steps): the exact
-    # test must keep them as query_ball_point does; radii of several sizes and infinite ones
-    # go through the classes and the all-points path. 15 origins are tested against every
-    # point, 300 queried one by one, 1500 searched by radius class.
+    # test must keep them as query_ball_point does; radii of several sizes, zero, far beyond the
+    # points and infinite. 15 origins are tested against every point, 300 and 1500 on the grid,
+    # also where the points span no area (a line) or no length (one spot).
     from scipy.spatial import cKDTree
 
     from seedtrack.tracking.initialisation import pairs_within
@@ -183,8 +184,13 @@ def test_pairs_within_gives_the_pairs_of_one_query_per_origin(seed, n):
     rng = np.random.default_rng(seed)
     origins = rng.integers(0, 80, (n, 2)).astype(float)
     points = rng.integers(0, 80, (400, 2)).astype(float)
+    if layout == "line":
+        points[:, 1] = 40.0
+    elif layout == "one spot":
+        points[:] = 40.0
     radius = rng.integers(0, 12, n).astype(float)
     radius[rng.random(n) < 0.01] = np.inf
+    radius[rng.random(n) < 0.01] = 1e6
     found = cKDTree(points).query_ball_point(origins, radius)
     owner, target = pairs_within(origins, radius, points)
     np.testing.assert_array_equal(owner, np.repeat(np.arange(n), [len(f) for f in found]))

@@ -115,36 +115,70 @@ def solve_split(
 
     # Pairs grouped by component, cheapest first within each.
     order = np.lexsort((weight, pair_label))
-    boundaries = np.flatnonzero(np.diff(pair_label[order])) + 1
+    label = pair_label[order]
+    boundaries = np.flatnonzero(label[1:] != label[:-1]) + 1
     starts = np.concatenate(([0], boundaries))
-    ends = np.concatenate((boundaries, [order.size]))
 
     # A component with one head (or one measurement) makes at most one match, its cheapest
     # pair: matching costs w (+ corner, the rest unmatched as they would be anyway), leaving it
     # costs 2 * unmatched; ties go to the match, as the solver's would.
-    single = single_of[pair_label[order[starts]]]
+    single = single_of[label[starts]]
     cheapest = order[starts[single]]
     take = weight[cheapest] + corner_weight <= 2 * unmatched_weight
     result[head[cheapest[take]]] = measurement[cheapest[take]]
+    if single.all():
+        return result
 
     # The other components in sparse solves of whole components, about _BATCH_PAIRS pairs each:
     # components do not interact, and each is solved as it would be alone.
-    multi = np.repeat(~single, ends - starts)
-    if multi.any():
-        pairs = order[multi]
-        # The one shift of a solve of them all, so that every batch rounds its weights alike.
-        shift = 1.0 - min(float(weight[pairs].min()), unmatched_weight, corner_weight)
-        opens = np.flatnonzero(np.diff(pair_label[pairs], prepend=-1))
-        batch = np.flatnonzero(np.diff(opens // _BATCH_PAIRS, prepend=-1))
-        bounds = np.append(opens[batch], pairs.size)
-        for low, high in zip(bounds[:-1], bounds[1:]):
-            part = pairs[low:high]
-            heads, local_head = np.unique(head[part], return_inverse=True)
-            measurements, local_measurement = np.unique(measurement[part], return_inverse=True)
-            joint = solve_sparse(heads.size, measurements.size, local_head, local_measurement, weight[part], unmatched_weight, corner_weight, shift)
-            held = joint != UNASSIGNED
-            result[heads[held]] = measurements[joint[held]]
+    pairs = order[~single_of[label]]
+    # The one shift of a solve of them all, so that every batch rounds its weights alike.
+    shift = 1.0 - min(float(weight[pairs].min()), unmatched_weight, corner_weight)
+    if pairs.size <= _BATCH_PAIRS:
+        # One batch: its heads and measurements found by marking them, cheaper than sorting.
+        _solve_batch(result, head, measurement, weight, pairs, unmatched_weight, corner_weight, shift, n_measurements)
+        return result
+    sizes = np.diff(np.append(starts, order.size))[~single]
+    opens = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    batch = np.flatnonzero(np.diff(opens // _BATCH_PAIRS, prepend=-1))
+    bounds = np.append(opens[batch], pairs.size)
+    for low, high in zip(bounds[:-1], bounds[1:]):
+        _solve_batch(result, head, measurement, weight, pairs[low:high], unmatched_weight, corner_weight, shift)
     return result
+
+
+def _solve_batch(
+    result: np.ndarray,
+    head: np.ndarray,
+    measurement: np.ndarray,
+    weight: np.ndarray,
+    part: np.ndarray,
+    unmatched_weight: float,
+    corner_weight: float,
+    shift: float,
+    n_measurements: int | None = None,
+) -> None:
+    """One sparse solve of the whole components whose pairs are ``part``, into ``result``.
+
+    With ``n_measurements`` the heads and measurements are found by marking them in arrays of
+    the frame's size (a few operations on small frames); without, by sorting (a batch of a large
+    frame)."""
+    if n_measurements is None:
+        heads, local_head = np.unique(head[part], return_inverse=True)
+        measurements, local_measurement = np.unique(measurement[part], return_inverse=True)
+    else:
+        heads, local_head = _marked(head[part], result.size)
+        measurements, local_measurement = _marked(measurement[part], n_measurements)
+    joint = solve_sparse(heads.size, measurements.size, local_head, local_measurement, weight[part], unmatched_weight, corner_weight, shift)
+    held = joint != UNASSIGNED
+    result[heads[held]] = measurements[joint[held]]
+
+
+def _marked(index: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(index, return_inverse=True)`` for indices below ``size``."""
+    mark = np.zeros(size, bool)
+    mark[index] = True
+    return np.flatnonzero(mark), (np.cumsum(mark) - 1)[index]
 
 
 def _components(n_heads: int, n_measurements: int, head: np.ndarray, measurement: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

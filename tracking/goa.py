@@ -258,10 +258,11 @@ def _candidates(state: HeadState, step: int, points: np.ndarray, config: GOAConf
         head=head,
         measurement=measurement,
         displacement=points.take(measurement, axis=0) - state.last_xy.take(head, axis=0) if head.size else np.empty((0, 2)),
-        gap=gap[head],
+        gap=gap.take(head),
         previous_velocity=state.velocity.take(head, axis=0),
-        previous_span=state.span[head],
-        history=state.moments[head],
+        previous_span=state.span.take(head),
+        # Only the mixture model reads a head's history; the others are spared copying it.
+        history=state.moments.take(head, axis=0) if isinstance(config.individual, MixtureModel) else None,
     )
 
 
