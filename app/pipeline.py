@@ -5,12 +5,13 @@ The layer between files and the library that every command and the Python API
 :class:`seedtrack.detection.clip.ClipDetector`, :func:`group_points` and :func:`track_frames`
 give points to :func:`seedtrack.tracking.linking.link_goa` (or another tracker) as ``seedtrack
 track`` does. Frames are streamed twice (once to detect, once to draw) rather than held in memory, so the
-clip's length does not bound what can be processed (with more than one worker, up to 256 MB of
-the second stream decodes ahead while tracking runs).
+clip's length does not bound what can be processed (with more than one worker, the last 256 MB of
+frames decoded for detection are kept for the overlay and not decoded again).
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import dataclasses
 import functools
@@ -231,6 +232,7 @@ def detect_clip(
     settings: DetectSettings = DetectSettings(), preview_frame: int | None = None,
     say: Callable[[str], None] | None = print,
     workers: int = 1,
+    keep: Callable[[int, np.ndarray], None] | None = None,
 ) -> ClipDetections:
     """Detect objects in every frame of a clip, with a progress bar
     (:class:`seedtrack.detection.clip.ClipDetector` on the frames read).
@@ -253,6 +255,9 @@ def detect_clip(
     workers : int
         Threads detecting frames (see :func:`seedtrack.parallel.threaded_map`); the result is
         the same for any number.
+    keep : callable, optional
+        Called with each processed frame's 0-based index and image as decoded, in order (in
+        the decoding thread), so that a caller may keep frames rather than decode them again.
 
     Raises
     ------
@@ -288,6 +293,8 @@ def detect_clip(
         def decoded():
             nonlocal preview
             for index, image in source:
+                if keep is not None:
+                    keep(index, image)
                 if index == preview_frame:
                     preview = to_bgr8(image, source.span).copy()
                 # Both detectors see only the grey levels of an 8-bit colour frame: made here,
@@ -444,28 +451,52 @@ def render_overlay(
     and, with more than one, the encoder has a process of its own; the file is the same for any
     number.
     """
-    with VideoEncoder(out, fps, workers) as encoder, _overlay_frames(path, selection, workers) as frames:
+    with VideoEncoder(out, fps, workers) as encoder, _overlay_frames(path, selection) as frames:
         _render(frames, tracks, detections, encoder, trail, workers)
 
 
-# Overlay frames that may wait decoded, with more than one worker, while tracking runs: tracking
-# is one thread's work, and decoding the overlay's frames beside it on the other core took them
-# off the single-core stretch after it (a 640x512 dish, load 9 on two cores: 300 frames decoded
-# during tracking, 5.3 -> 3.9 s for both). About 260 frames of 640x512 BGR; larger frames, fewer.
-_HELD_FOR_OVERLAY_BYTES = 256 * 2**20
+# Frames kept from detection's decoding for the overlay, with more than one worker: tracking is
+# one thread's work, and decoding the overlay's frames again beside it took the other core for
+# the whole of tracking (a 640x512 dish: 300 frames, about 1.1 s of CPU). About 270 frames of
+# 640x512 BGR; larger frames, fewer.
+_KEPT_FOR_OVERLAY_BYTES = 256 * 2**20
+
+
+class _LastFrames:
+    """The last ``(frame_index, image)`` pairs handed to it, as many as ``limit`` bytes hold
+    (``dropped`` says whether earlier ones were let go)."""
+
+    def __init__(self, limit: int) -> None:
+        self.frames: collections.deque = collections.deque()
+        self.dropped = False
+        self._limit, self._bytes = limit, 0
+
+    def __call__(self, index: int, image: np.ndarray) -> None:
+        self.frames.append((index, image))
+        self._bytes += image.nbytes
+        while self._bytes > self._limit:
+            self._bytes -= self.frames.popleft()[1].nbytes
+            self.dropped = True
+
+    def taken(self) -> Iterator[tuple[int, np.ndarray]]:
+        """The frames kept, each let go once taken."""
+        while self.frames:
+            yield self.frames.popleft()
 
 
 @contextlib.contextmanager
-def _overlay_frames(path: Path, selection: DetectSettings | None, workers: int) -> Iterator[tuple[FrameSource, Iterator[tuple[int, np.ndarray]]]]:
-    """The clip opened over the selected frames and ``(frame_index, image)`` pairs decoding
-    ahead in a thread from now on: with more than one worker up to ``_HELD_FOR_OVERLAY_BYTES``
-    of them (so that they decode while tracking runs), else a few. Leaving stops the thread and
-    closes the clip."""
+def _overlay_frames(path: Path, selection: DetectSettings | None, kept: _LastFrames | None = None) -> Iterator[tuple[FrameSource, Iterator[tuple[int, np.ndarray]]]]:
+    """The clip opened over the selected frames and ``(frame_index, image)`` pairs decoding a
+    few ahead in a thread from now on; with ``kept``, only the frames before those kept are
+    decoded, and the kept ones follow. Leaving stops the thread and closes the clip."""
     span = {} if selection is None else {"start": selection.start, "end": selection.end, "step": selection.step}
     with open_frames(path, **span) as source:
-        width, height = source.size
-        depth = max(4, _HELD_FOR_OVERLAY_BYTES // (3 * width * height)) if workers > 1 else 4
-        with read_ahead(source, depth) as read:
+        frames: Iterable[tuple[int, np.ndarray]] = source
+        if kept is not None:
+            first = kept.frames[0][0] if kept.frames else sys.maxsize
+            before = itertools.takewhile(lambda frame: frame[0] < first, source) if kept.dropped else ()
+            frames = itertools.chain(before, kept.taken())
+        with read_ahead(frames) as read:
             yield source, read
 
 
@@ -497,8 +528,8 @@ def run_pipeline(
     detail); the overlay is a preview, encoded with x264's
     :data:`~seedtrack.data.video.PREVIEW_PRESET` at :data:`~seedtrack.data.video.PREVIEW_CRF`. Detection and drawing use
     ``workers`` threads, and with more than one the encoder a process of its own, started before
-    tracking, while the overlay's frames decode beside tracking; the files are the same for any
-    number.
+    tracking, and the overlay takes the last 256 MB of frames detection decoded rather than
+    decoding them again; the files are the same for any number.
 
     The three files and ``manifest.json`` replace an earlier run's as one set
     (:func:`seedtrack.data.outputset.output_set`): stopped at any point, the folder holds the
@@ -512,15 +543,16 @@ def run_pipeline(
         # pandas, which writes the tables (a third of run's imports), loads in a thread beside
         # detection, whose threads leave part of a core free, rather than alone on one core.
         threading.Thread(target=importlib.import_module, args=("pandas",), daemon=True).start()
-        found = detect_clip(clip, detection, workers=workers)
+        kept = _LastFrames(_KEPT_FOR_OVERLAY_BYTES) if workers > 1 else None
+        found = detect_clip(clip, detection, workers=workers, keep=kept)
         detections = found.detections
         rows = detections.to_rows()
         write_table(paths["detections.csv"], rows)
         # Grouped as `seedtrack track` groups detections.csv, so that run = detect + track; the
         # columns of the tracks are the processed frames, as the overlay and the writer take them.
-        # The encoder's process starts, and the overlay's frames decode, beside tracking, which
-        # runs on one core.
-        with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET, PREVIEW_CRF) as encoder, _overlay_frames(clip, detection, workers) as frames:
+        # The encoder's process starts, and the overlay's first frames decode, beside tracking,
+        # which runs on one core.
+        with VideoEncoder(paths["overlay.mp4"], found.fps, workers, PREVIEW_PRESET, PREVIEW_CRF) as encoder, _overlay_frames(clip, detection, kept) as frames:
             points = group_points(rows, clip, detections.frame_indices)
             tracks = track_frames(points.frames, localised(tracking, points), verbose=verbose)
             write_tracks(paths["tracks.csv"], tracks, detections.frame_indices)

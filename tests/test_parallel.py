@@ -112,8 +112,9 @@ class _Counted:
 
 
 @pytest.mark.parametrize("workers", [1, 2])
-def test_with_two_workers_the_overlays_frames_decode_while_tracking_runs(tmp_path, monkeypatch, workers):
-    # With one, a few wait decoded, so that memory does not grow with the clip.
+def test_with_two_workers_the_overlay_takes_the_frames_detection_decoded(tmp_path, monkeypatch, workers):
+    # With one, the overlay decodes them again, a few ahead, so that memory does not grow with
+    # the clip.
     from seedtrack import pipeline
 
     write_dish_clip(DishSpec(seeds=20, frames=40, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
@@ -125,16 +126,40 @@ def test_with_two_workers_the_overlays_frames_decode_while_tracking_runs(tmp_pat
         return sources[-1]
 
     def tracking(*args, **kwargs):
-        deadline = time.monotonic() + (10 if workers > 1 else 0.3)
-        while sources[-1].taken < 40 and time.monotonic() < deadline:
-            time.sleep(0.01)
+        time.sleep(0.3)
         seen.append(sources[-1].taken)
         return track(*args, **kwargs)
 
     monkeypatch.setattr(pipeline, "open_frames", counted)
     monkeypatch.setattr(pipeline, "track_frames", tracking)
     pipeline.run_pipeline(tmp_path / "clip" / "clip.mp4", tmp_path / "out", workers=workers)
-    assert seen == [40] if workers > 1 else 0 < seen[0] <= 5
+    assert sources[0].taken == 40
+    assert sources[-1].taken == (0 if workers > 1 else 40)
+    assert seen == [0] if workers > 1 else 0 < seen[0] <= 5
+
+
+def test_the_overlay_decodes_again_only_the_frames_before_those_kept(tmp_path, monkeypatch):
+    from seedtrack import pipeline
+
+    write_dish_clip(DishSpec(seeds=20, frames=40, width=256, height=192, rim_speed=12.0, random_seed=3), tmp_path / "clip")
+    clip = tmp_path / "clip" / "clip.mp4"
+    # Room for the last 10 of the 40 frames (256 x 192 BGR).
+    monkeypatch.setattr(pipeline, "_KEPT_FOR_OVERLAY_BYTES", 10 * 256 * 192 * 3)
+    sources = []
+    opened = pipeline.open_frames
+
+    def counted(*args, **kwargs):
+        sources.append(_Counted(opened(*args, **kwargs)))
+        return sources[-1]
+
+    monkeypatch.setattr(pipeline, "open_frames", counted)
+    pipeline.run_pipeline(clip, tmp_path / "two", workers=2)
+    # The first 30 frames, and the first kept one, seen and left.
+    assert sources[-1].taken == 31
+    monkeypatch.setattr(pipeline, "open_frames", opened)
+    pipeline.run_pipeline(clip, tmp_path / "one", workers=1)
+    for name in ("detections.csv", "tracks.csv", "overlay.mp4"):
+        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes(), name
 
 
 def test_workers_below_one_is_refused(tmp_path, capsys):

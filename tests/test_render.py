@@ -10,7 +10,7 @@ from PIL import Image
 
 from seedtrack.cli import main
 from seedtrack.scoring import disagreeing_links
-from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Style, TrackLayer, View, annotate, draw_text, ring_radius, summary_picture, track_colour
+from seedtrack.drawing import PALETTE_BGR, WARNING_BGR, FalseDetections, Occupancy, Style, TrackLayer, View, annotate, draw_text, ring_radius, summary_picture, track_colour
 from seedtrack.data.csvio import write_table
 from seedtrack.data.dish import DishSpec, write_dish_clip
 from seedtrack.data.frames import open_frames
@@ -150,6 +150,14 @@ def test_view_maps_pixel_centres_to_pixel_centres():
     view = View.of((100, 80), "10,20,60,70", 2.0)
     assert view.size == (100, 100)
     np.testing.assert_allclose(view.points(np.array([[10.0, 20.0], [59.0, 69.0]])), [[0.5, 0.5], [98.5, 98.5]])
+
+
+def test_a_head_outside_a_cropped_view_takes_no_room_from_labels():
+    taken = Occupancy((100, 200))
+    taken.add_points(np.array([[-30.0, 50.0], [50.0, -30.0]]), 5.6)
+    assert not taken.grid.any()
+    taken.add_points(np.array([[50.0, 50.0]]), 5.6)
+    assert not taken.free(48, 48, 52, 52) and taken.free(100, 50, 110, 60)
 
 
 def test_false_detections_are_those_no_measured_point_holds():

@@ -17,11 +17,12 @@ and, for generated 128x128 clips of 2,000 and 20,000 frames with 6 seeds, ``run`
 the long clips, and ``--repeats N``
 runs the 300-frame clip N times with each number of workers (in turns) and measures each long
 clip N times, and prints the median of each figure and of the ratios. ``--phases``
-prints instead, for ``run --workers 1`` and ``--workers 2`` of the 300-frame clip (in turns, N of
-each), each phase's wall time and the CPU time of every thread of ``run`` and of the processes it
-starts (read from /proc every 20 ms), with the wall time two free cores would need at least: the
-larger of half the phase's CPU time and its busiest thread's; then that least wall time of the
-whole run and the ratio of 2 workers' to 1's, turn by turn. The imports phase is ``run``'s own
+prints instead, for decoding the 300-frame clip alone (imports, then decoding), ``run --workers
+1`` and ``--workers 2`` of it (in turns, N of each), each phase's wall time and the CPU time of
+every thread and of the processes it starts (read from /proc every 20 ms), with the wall time two
+free cores would need at least: the larger of half the phase's CPU time and its busiest thread's;
+then that least wall time of each whole and the ratios (each ``run`` over decoding, 2 workers
+over 1), turn by turn. The imports phase is ``run``'s own
 beside the fork server's (with 2 workers), started
 first as ``run`` starts it. CPU times change little with the load, so on a
 busy machine that bound says what the wall time alone cannot. Wall times on a shared machine include what other
@@ -165,6 +166,8 @@ from pathlib import Path
 TICK = os.sysconf("SC_CLK_TCK")
 ME = os.getpid()
 seen, marks, lock = {}, [], threading.Lock()
+# The sampling thread's own time (reading /proc, about 5% of a core) is not the measured program's.
+SAMPLER = []
 
 
 def descendants():
@@ -190,6 +193,8 @@ def sample():
             except OSError:
                 continue
             for tid in threads:
+                if pid == ME and int(tid) in SAMPLER:
+                    continue
                 try:
                     fields = open(f"/proc/{pid}/task/{tid}/stat").read().rsplit(")", 1)[1].split()
                 except OSError:
@@ -198,6 +203,7 @@ def sample():
 
 
 def sampler():
+    SAMPLER.append(threading.get_native_id())
     while True:
         sample()
         time.sleep(0.02)
@@ -216,9 +222,25 @@ def marked(name, function):
     return call
 
 
+def decode_alone(path):
+    mark("imports")
+    from seedtrack.data.frames import open_frames
+    mark("decoding")
+    with open_frames(path) as frames:
+        for _ in frames:
+            pass
+
+
 if __name__ == "__main__":
     threading.Thread(target=sampler, daemon=True).start()
     mark("")
+    if sys.argv[2] == "decode":
+        decode_alone(Path(sys.argv[1]))
+        mark("end")
+        for (name, start, before), (_, end, after) in zip(marks[1:], marks[2:]):
+            spent = sorted((after[key] - before.get(key, 0.0) for key in after), reverse=True)
+            print("phase", name, end - start, sum(spent), *spent[:3])
+        sys.exit()
     mark("imports")
     workers = int(sys.argv[3])
     # As `seedtrack run` does before its imports, with more than one worker.
@@ -238,41 +260,59 @@ if __name__ == "__main__":
 """
 
 
-PHASES_HEADER = ["turn", "load average", "`--workers 1`: least wall on two free cores, s", "`--workers 2`: the same, s", "workers 2 / workers 1"]
+PHASES_HEADER = [
+    "turn", "load average", "decoding alone: least wall on two free cores, s", "`--workers 1`: the same, s", "`--workers 2`: the same, s",
+    "workers 1 / decoding", "workers 2 / decoding", "workers 2 / workers 1",
+]
+
+
+def least_wall(command: list[str], title: str) -> float:
+    """Run the phases script as ``command``, print its phases under ``title``, and return the
+    least wall time two free cores would need for the whole (the sum over its phases)."""
+    lines = subprocess.run(command, check=True, capture_output=True, text=True).stdout.splitlines()
+    print(title)
+    print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
+    print("| --- | --- | --- | --- | --- |")
+    totals = [0.0, 0.0, 0.0]
+    for line in (line for line in lines if line.startswith("phase ")):
+        name, wall, cpu, *busiest = line.split()[1:]
+        wall, cpu, busiest = float(wall), float(cpu), [float(value) for value in busiest]
+        bound = max(cpu / 2, busiest[0])
+        totals = [totals[0] + wall, totals[1] + cpu, totals[2] + bound]
+        print(f"| {name} | {wall:.2f} | {cpu:.2f} | {', '.join(f'{value:.2f}' for value in busiest)} | {bound:.2f} |")
+    print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
+    return totals[2]
 
 
 def phases(folder: Path, repeats: int, write_docs: bool = False) -> None:
-    """Per phase of ``run --workers 1`` and ``--workers 2`` on the 300-frame clip, in turns: wall,
-    CPU, busiest threads and the least wall time two free cores would need; then that least wall
-    time of each run, and the ratio of 2 workers' to 1's in each turn (``write_docs``: into
-    docs/batch.md)."""
+    """Per phase of decoding the 300-frame clip alone, ``run --workers 1`` and ``--workers 2``,
+    in turns: wall, CPU, busiest threads and the least wall time two free cores would need; then
+    that least wall time of each, and each turn's ratios (``write_docs``: into docs/batch.md)."""
     clip = folder / "dish" / "clip.mp4"
     write_dish_clip(DishSpec(seeds=80, frames=300, width=640, height=512, rim_speed=20.0), clip.parent)
     script = folder / "phases.py"
     script.write_text(_PHASES)
-    least, loads = {1: [], 2: []}, []
+    turns = []
     for _ in range(repeats):
-        loads.append(os.getloadavg()[0])
-        for workers in (1, 2):
-            load = os.getloadavg()[0]
-            command = [sys.executable, str(script), str(clip), str(folder / f"out{workers}"), str(workers)]
-            lines = subprocess.run(command, check=True, capture_output=True, text=True).stdout.splitlines()
-            print(f"run --workers {workers}, 300 frames, 640x512, 80 seeds; load average {load:.1f}")
-            print("| phase | wall, s | CPU, s | busiest threads, CPU s | two free cores need at least, s |")
-            print("| --- | --- | --- | --- | --- |")
-            totals = [0.0, 0.0, 0.0]
-            for line in (line for line in lines if line.startswith("phase ")):
-                name, wall, cpu, *busiest = line.split()[1:]
-                wall, cpu, busiest = float(wall), float(cpu), [float(value) for value in busiest]
-                bound = max(cpu / 2, busiest[0])
-                totals = [totals[0] + wall, totals[1] + cpu, totals[2] + bound]
-                print(f"| {name} | {wall:.2f} | {cpu:.2f} | {', '.join(f'{value:.2f}' for value in busiest)} | {bound:.2f} |")
-            print(f"| all | {totals[0]:.2f} | {totals[1]:.2f} | | {totals[2]:.2f} (CPU / that: {totals[1] / totals[2]:.2f}) |")
-            least[workers].append(totals[2])
-    ratios = [two / one for one, two in zip(least[1], least[2])]
-    rows = [[str(number), f"{load:.1f}", f"{one:.2f}", f"{two:.2f}", f"{two / one:.2f}"] for number, (load, one, two) in enumerate(zip(loads, least[1], least[2]), 1)]
+        load = os.getloadavg()[0]
+        decode = least_wall([sys.executable, str(script), str(clip), "decode"], f"decoding alone, 300 frames, 640x512; load average {os.getloadavg()[0]:.1f}")
+        one, two = (
+            least_wall([sys.executable, str(script), str(clip), str(folder / f"out{workers}"), str(workers)],
+                       f"run --workers {workers}, 300 frames, 640x512, 80 seeds; load average {os.getloadavg()[0]:.1f}")
+            for workers in (1, 2)
+        )
+        turns.append((load, decode, one, two))
+    rows = [
+        [str(number), f"{load:.1f}", f"{decode:.2f}", f"{one:.2f}", f"{two:.2f}", f"{one / decode:.2f}", f"{two / decode:.2f}", f"{two / one:.2f}"]
+        for number, (load, decode, one, two) in enumerate(turns, 1)
+    ]
     median = statistics.median
-    rows.append([f"median of {repeats}", f"{median(loads):.1f}", f"{median(least[1]):.2f}", f"{median(least[2]):.2f}", f"**{median(ratios):.2f}**"])
+    loads, decodes, ones, twos = zip(*turns)
+    rows.append([
+        f"median of {repeats}", f"{median(loads):.1f}", f"{median(decodes):.2f}", f"{median(ones):.2f}", f"{median(twos):.2f}",
+        f"{median(o / d for d, o in zip(decodes, ones)):.2f}", f"**{median(t / d for d, t in zip(decodes, twos)):.2f}**",
+        f"**{median(t / o for o, t in zip(ones, twos)):.2f}**",
+    ])
     print(markdown_table(PHASES_HEADER, rows))
     if write_docs:
         write_table("batch.md", "run-phases", PHASES_HEADER, rows)
