@@ -84,6 +84,15 @@ def test_states_of_a_few_links_in_a_row_are_one():
     assert len(fit_states(chains, fit_chains(chains))[0]) == 1
 
 
+def test_states_of_one_persistence_are_one():
+    # Smooth movers, half of them with ten times the noise, each keeping its own: two states by
+    # noise alone, as wrong links that chain make of one kind of motion.
+    rng = np.random.default_rng(7)
+    paths = np.concatenate((_smooth(rng, 150), rng.normal(0.0, 3.0, (150, 1, 2)) + rng.normal(0.0, 2.0, (150, 8, 2))))
+    chains = _chains(paths)
+    assert len(fit_states(chains, fit_chains(chains))[0]) == 1
+
+
 def test_a_state_as_wide_as_the_spacing_is_no_state():
     rng = np.random.default_rng(4)
     paths = np.concatenate((_smooth(rng, 100), rng.normal(0.0, 2.0, (100, 8, 2))))
