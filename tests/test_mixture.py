@@ -85,8 +85,9 @@ def test_states_of_a_few_links_in_a_row_are_one():
 
 
 def test_states_of_one_persistence_are_one():
-    # Smooth movers, half of them with ten times the noise, each keeping its own: two states by
-    # noise alone, as wrong links that chain make of one kind of motion.
+    # Smooth movers, half of them with ten times the noise, each keeping its own: two states
+    # that differ in noise (their fitted persistences 1.00 and 0.69, noise diluting the second),
+    # as wrong links that chain make of one kind of motion.
     rng = np.random.default_rng(7)
     paths = np.concatenate((_smooth(rng, 150), rng.normal(0.0, 3.0, (150, 1, 2)) + rng.normal(0.0, 2.0, (150, 8, 2))))
     chains = _chains(paths)
