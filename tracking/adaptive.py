@@ -232,8 +232,9 @@ def measuring_sample(frames: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _states(chains, statistics: MotionStatistics, config: GOAConfig):
-    """The scene's motion states and their shares when ``config`` asks for them per track and
-    the chains hold more than one (:func:`seedtrack.tracking.mixture.fit_states`), else None."""
+    """The scene's motion states and their shares where ``config`` allows them per track (the
+    default) and the chains show tracks keeping more than one
+    (:func:`seedtrack.tracking.mixture.fit_states` decides), else None."""
     if config.motion_states != "track":
         return None
     states = fit_states(chains, statistics)

@@ -109,11 +109,13 @@ class GOAConfig:
         Localisation error of the positions, pixels per axis (standard deviation; 0 when not
         known). The measured motion model's noise never falls below what it puts on a velocity
         change (sqrt(6) times it), nor below what positions on a grid can hold.
-    motion_states : {"scene", "track"}
-        For the measured motion model: one persistence and noise for the whole scene
-        ("scene", :class:`~seedtrack.tracking.persistence.PersistentModel`), or motion states
-        fitted to the scene and each track's own state judged from its history ("track",
-        :class:`~seedtrack.tracking.mixture.MixtureModel`).
+    motion_states : {"track", "scene"}
+        For the measured motion model: motion states fitted to the scene and each track's own
+        state judged from its history where the final pass's tracks keep their states
+        ("track", the default; :class:`~seedtrack.tracking.mixture.MixtureModel`, else the
+        scene-wide model: :func:`~seedtrack.tracking.mixture.fit_states` decides), or always one
+        persistence and noise for the whole scene ("scene",
+        :class:`~seedtrack.tracking.persistence.PersistentModel`).
     """
 
     individual: IndividualModel = field(default_factory=IndividualModel)
@@ -128,7 +130,7 @@ class GOAConfig:
     restart_lost: bool = True
     solver: str = "split"
     localisation_error: float = 0.0
-    motion_states: str = "scene"
+    motion_states: str = "track"
 
     def __post_init__(self) -> None:
         check_limit("phi_max", self.phi_max, optional=False)

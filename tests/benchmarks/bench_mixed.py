@@ -1,11 +1,12 @@
 """Motion states per track (issue 29 item 3): scenes that mix smooth movers, random walkers and
-oscillators, tracked by the scene-wide measured model (today's default) and by motion states per
-track, beside trackpy (plain and with its predictor), laptrack and the one-step oracle.
+oscillators, tracked by the scene-wide measured model (``motion_states="scene"``) and by the
+default (motion states per track where the tracks keep them, else the scene-wide model), beside
+trackpy (plain and with its predictor), laptrack and the one-step oracle.
 
 Run as ``python tests/benchmarks/bench_mixed.py [--seeds reporting|tuning] [--table mixed|unseen|held-out]
 [--only WORD] [--trackers a,b] [--write-docs]``. ``--table mixed`` (default) draws :mod:`seedtrack.data.mixed_motion`
 scenes; ``unseen`` bench_unseen.py's scenes and ``held-out`` bench_held_out.py's dishes and PSMG,
-to show what the per-track model changes where one kind of motion fills the scene. Seeds were
+to show what the default changes where one kind of motion fills the scene. Seeds were
 split before anything was looked at: tuning 0-4, reporting 1000-1004 (the table printed by
 default; on ``held-out`` the first three of each).
 
@@ -32,7 +33,7 @@ from seedtrack.tracking.goa import GOAConfig
 from seedtrack.tracking.linking import link_goa
 
 SEED_SETS = {"tuning": range(0, 5), "reporting": range(1000, 1005)}
-VARIANTS = {"seedtrack scene-wide": "scene", "seedtrack per track": "track"}
+VARIANTS = {"seedtrack scene-wide": "scene", "seedtrack": "track"}
 TRACKERS = (*VARIANTS, "trackpy", "trackpy predict", "laptrack", "oracle")
 
 
