@@ -170,9 +170,17 @@ def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
     for k in range(n):
         free[k][assignment[held[:, k], k]] = False
     rows = [assignment]
+    # No gate reaches past the speed limit: where every free point of frame k, or of k + 1, lies
+    # that far inside the view, no pair can make a track, and the step is not made.
+    limit = config.speed.d_max
     for k in range(n - 1):
         first, second = np.flatnonzero(free[k]), np.flatnonzero(free[k + 1])
         if first.size == 0 or second.size == 0:
+            continue
+        if limit is not None and not (
+            _reaches_out(frames, k - 1, frames[k][first], np.full(first.size, limit)).any()
+            and _reaches_out(frames, k + 2, frames[k + 1][second], np.full(second.size, limit)).any()
+        ):
             continue
         state = HeadState(frames[k][first], np.full(first.size, k), np.full((first.size, 2), np.nan))
         taken = assign_step(state, k + 1, frames[k + 1][second], config)
