@@ -152,6 +152,8 @@ def _sweep(xy: np.ndarray, measurement: np.ndarray, measured: np.ndarray, statis
             visit = list(np.flatnonzero(best < now - _MARGIN))
             heapq.heapify(visit)
             seen = -1
+            # Pairs weighed again on the tracks as they are now, by their place in ``visit``.
+            fresh: dict[int, tuple] = {}
             while visit:
                 p = heapq.heappop(visit)
                 if p <= seen:
@@ -162,13 +164,21 @@ def _sweep(xy: np.ndarray, measurement: np.ndarray, measured: np.ndarray, statis
                     if budget <= 0 or not (kink[q] or np.hypot(*(xy[pair[0], k] - xy[pair[1], k])) <= _ENCOUNTER_SIGMAS * max(sigma[a[q]], sigma[b[q]])):
                         continue
                     budget -= 1
-                    [pair_now], [pair_best], [span] = _pairings(xy, measured, i[q : q + 1], j[q : q + 1], k, statistics)
+                    if p not in fresh:
+                        # Weighed together with the pairs still to visit that hold an exchanged
+                        # track, as many as the budget allows: until the next exchange the tracks
+                        # stay as they are (a swarm's pairs were weighed one call each).
+                        pending = sorted({r for r in visit if r > p and exchanged.intersection((int(first_i[r]), int(first_j[r])))})
+                        batch = np.array([p, *pending[:budget]])
+                        fresh = dict(zip(batch.tolist(), zip(*_pairings(xy, measured, first_i[batch], first_j[batch], k, statistics))))
+                    pair_now, pair_best, span = fresh[p]
                 else:
                     pair_now, pair_best, span = now[p], best[p], spans[p]
                 if pair_best < pair_now - _MARGIN:
                     for array in (xy, measurement, measured):
                         array[pair, span[0] : span[1]] = array[pair[::-1], span[0] : span[1]]
                     exchanged.update(pair)
+                    fresh = {}
                     changed = True
                     later = p + 1 + np.flatnonzero(np.isin(first_i[p + 1 :], pair) | np.isin(first_j[p + 1 :], pair))
                     for r in later.tolist():
