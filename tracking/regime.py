@@ -172,6 +172,13 @@ def _query(tree: cKDTree, points: np.ndarray, order: np.ndarray, k: int = 1) -> 
     return distance[back], index[back]
 
 
+def _rank(tree: cKDTree) -> np.ndarray:
+    """Each point's place in ``tree``'s order (near after near)."""
+    rank = np.empty_like(tree.indices)
+    rank[tree.indices] = np.arange(tree.indices.size)
+    return rank
+
+
 def _indexed_pairs(frames: Sequence[np.ndarray], spacings: Sequence[np.ndarray] | None = None) -> Iterator[tuple[_Frame, _Frame]]:
     """Consecutive frames with their search trees, two trees alive at a time: all of a clip's
     at once took 3 kB a frame (60 MB for 20,000 frames). ``spacings``: each frame's, when
@@ -206,10 +213,16 @@ def _links(a: _Frame, b: _Frame) -> tuple[np.ndarray, np.ndarray]:
     if a.points.shape[0] < 2 or b.points.shape[0] < 2:
         return link, reach
     distance, forward = _query(b.tree, a.points, a.tree.indices)
-    backward = _query(a.tree, b.points, b.tree.indices)[1]
-    mutual = backward[forward] == np.arange(a.points.shape[0])
     bound = _CLEAR_FRACTION * np.minimum(a.spacing, b.spacing[forward])
-    keep = mutual & (distance < bound)
+    near = np.flatnonzero(distance < bound)
+    # Whether a point is the nearest of its nearest is asked only where it is near enough to be
+    # kept: the links by chance are few, and their looks asked it of every point of the frame.
+    # In the order of b's tree, as _query asks.
+    asked = forward[near]
+    order = np.argsort(_rank(b.tree)[asked], kind="stable")
+    backward = np.empty_like(asked)
+    backward[order] = a.tree.query(b.points[asked[order]])[1] if asked.size else asked
+    keep = near[backward == near]
     link[keep] = forward[keep]
     reach[keep] = bound[keep]
     return link, reach
