@@ -86,21 +86,8 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
     first_frame, track_ids = tracks.first_frame, tracks.track_ids
     del tracks
     measured = measurement != NO_MEASUREMENT
-    budget = int(_REWEIGHED_SHARE * np.count_nonzero(measured))
-    # A frame's tree serves its close pairs and its kinked tracks' reach (and the next sweep,
-    # where no exchange moved its points): built twice a frame, trees were a third of the repair
-    # at 10,000 points a frame.
-    with shared_trees():
-        _sweep(xy, measurement, measured, statistics, budget)
-    del measured
-    return Tracks.from_dense(xy, measurement, first_frame, track_ids)
-
-
-def _sweep(xy: np.ndarray, measurement: np.ndarray, measured: np.ndarray, statistics: MotionStatistics, budget: int) -> None:
-    """The sweeps of :func:`resolve_crossings` over the dense tracks (n_tracks, n_frames), each
-    exchange made in place, until one exchanges nothing."""
-    n_frames = xy.shape[1]
     drift = np.asarray(statistics.drift)
+    budget = int(_REWEIGHED_SHARE * np.count_nonzero(measured))
     for _ in range(_SWEEPS):
         changed = False
         for k in range(n_frames):
@@ -117,15 +104,18 @@ def _sweep(xy: np.ndarray, measurement: np.ndarray, measured: np.ndarray, statis
                 step[into] = xy[rows[into], k] - xy[rows[into], k - 1] - drift
             sigma = np.sqrt(statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", step, step))
             here = xy[rows, k]
-            pairs = [tree_of(here).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
             # A track that changes its velocity at k beyond the encounter distance may hold a
             # neighbour's point there (taken after a wrong link nearby): its pairs reach to the gate.
             both = np.flatnonzero(into & out)
             change = np.zeros((0, 2)) if not both.size else xy[rows[both], k + 1] - xy[rows[both], k] - drift - statistics.persistence * _turned(step[both], statistics.turn)
             kinked = both[np.hypot(*change.T) > _ENCOUNTER_SIGMAS * sigma[both]]
-            if kinked.size:
-                owner, near = pairs_within(here[kinked], _KINK_REACH * sigma[kinked], here)
-                pairs.append(np.column_stack((kinked[owner], near))[kinked[owner] != near])
+            # One tree of the frame's points serves both searches, let go after them: built twice,
+            # trees were a third of the repair at 10,000 points a frame.
+            with shared_trees():
+                pairs = [tree_of(here).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
+                if kinked.size:
+                    owner, near = pairs_within(here[kinked], _KINK_REACH * sigma[kinked], here)
+                    pairs.append(np.column_stack((kinked[owner], near))[kinked[owner] != near])
             if not any(p.size for p in pairs):
                 continue
             # Each pair once, smaller index first, in order: as one number per pair, which sorts
@@ -185,6 +175,8 @@ def _sweep(xy: np.ndarray, measurement: np.ndarray, measured: np.ndarray, statis
                         heapq.heappush(visit, r)
         if not changed:
             break
+    del measured
+    return Tracks.from_dense(xy, measurement, first_frame, track_ids)
 
 
 def _pairings(xy, measured, i: np.ndarray, j: np.ndarray, k: int, statistics: MotionStatistics):
