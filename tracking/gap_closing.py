@@ -102,14 +102,18 @@ def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
     last = np.where(held, frame, -1).max(axis=1)
     before = np.where(held & (frame < last[:, None]), frame, -1).max(axis=1)
     del held
+    # Every frame's points in one array, each frame from its offset: a head's points are looked up
+    # at once (frame by frame they took a unique and a loop at every step).
+    everything = np.concatenate([np.asarray(f, dtype=float).reshape(-1, 2) for f in frames])
+    offset = np.concatenate(([0], np.cumsum([len(f) for f in frames])))
     for k in range(2, n):
         heads = np.flatnonzero((last < k) & (last >= k - 1 - _EXTEND_ACROSS) & (before >= 0))
         index = np.flatnonzero(free[k])
         if heads.size == 0 or index.size == 0:
             continue
-        newest = _positions(frames, assignment, heads, last[heads])
+        newest = everything[offset[last[heads]] + assignment[heads, last[heads]]]
         span = last[heads] - before[heads]
-        velocity = (newest - _positions(frames, assignment, heads, before[heads])) / span[:, None]
+        velocity = (newest - everything[offset[before[heads]] + assignment[heads, before[heads]]]) / span[:, None]
         state = HeadState(newest, last[heads].copy(), velocity, span)
         taken = assign_step(state, k, frames[k][index], config)
         got = taken != UNASSIGNED
@@ -118,15 +122,6 @@ def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
         before[heads[got]] = last[heads[got]]
         last[heads[got]] = k
     return assignment
-
-
-def _positions(frames: Sequence[np.ndarray], assignment: np.ndarray, tracks: np.ndarray, columns: np.ndarray) -> np.ndarray:
-    """Positions (P, 2), pixels, of the measurements that ``tracks`` hold in ``columns`` (one each)."""
-    xy = np.empty((tracks.size, 2))
-    for column in np.unique(columns):
-        rows = columns == column
-        xy[rows] = frames[column][assignment[tracks[rows], column]]
-    return xy
 
 
 def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
