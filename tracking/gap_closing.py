@@ -102,14 +102,18 @@ def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
     last = np.where(held, frame, -1).max(axis=1)
     before = np.where(held & (frame < last[:, None]), frame, -1).max(axis=1)
     del held
+    # Every frame's points in one array, each frame from its offset: a head's points are looked up
+    # at once (frame by frame they took a unique and a loop at every step).
+    everything = np.concatenate([np.asarray(f, dtype=float).reshape(-1, 2) for f in frames])
+    offset = np.concatenate(([0], np.cumsum([len(f) for f in frames])))
     for k in range(2, n):
         heads = np.flatnonzero((last < k) & (last >= k - 1 - _EXTEND_ACROSS) & (before >= 0))
         index = np.flatnonzero(free[k])
         if heads.size == 0 or index.size == 0:
             continue
-        newest = _positions(frames, assignment, heads, last[heads])
+        newest = everything[offset[last[heads]] + assignment[heads, last[heads]]]
         span = last[heads] - before[heads]
-        velocity = (newest - _positions(frames, assignment, heads, before[heads])) / span[:, None]
+        velocity = (newest - everything[offset[before[heads]] + assignment[heads, before[heads]]]) / span[:, None]
         state = HeadState(newest, last[heads].copy(), velocity, span)
         taken = assign_step(state, k, frames[k][index], config)
         got = taken != UNASSIGNED
@@ -118,15 +122,6 @@ def extend_track_ends(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
         before[heads[got]] = last[heads[got]]
         last[heads[got]] = k
     return assignment
-
-
-def _positions(frames: Sequence[np.ndarray], assignment: np.ndarray, tracks: np.ndarray, columns: np.ndarray) -> np.ndarray:
-    """Positions (P, 2), pixels, of the measurements that ``tracks`` hold in ``columns`` (one each)."""
-    xy = np.empty((tracks.size, 2))
-    for column in np.unique(columns):
-        rows = columns == column
-        xy[rows] = frames[column][assignment[tracks[rows], column]]
-    return xy
 
 
 def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, config: GOAConfig) -> np.ndarray:
@@ -170,9 +165,17 @@ def pair_at_view_edge(frames: Sequence[np.ndarray], assignment: np.ndarray, conf
     for k in range(n):
         free[k][assignment[held[:, k], k]] = False
     rows = [assignment]
+    # No gate reaches past the speed limit: where every free point of frame k, or of k + 1, lies
+    # that far inside the view, no pair can make a track, and the step is not made.
+    limit = config.speed.d_max
     for k in range(n - 1):
         first, second = np.flatnonzero(free[k]), np.flatnonzero(free[k + 1])
         if first.size == 0 or second.size == 0:
+            continue
+        if limit is not None and not (
+            _reaches_out(frames, k - 1, frames[k][first], np.full(first.size, limit)).any()
+            and _reaches_out(frames, k + 2, frames[k + 1][second], np.full(second.size, limit)).any()
+        ):
             continue
         state = HeadState(frames[k][first], np.full(first.size, k), np.full((first.size, 2), np.nan))
         taken = assign_step(state, k + 1, frames[k + 1][second], config)

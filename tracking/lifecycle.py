@@ -63,8 +63,9 @@ class OpenTracks:
             The window's first step.
         """
         start = step - min(self.confirmation, len(frames)) + 1
-        # Checked before the window is gathered: on most steps of a tracked clip nothing is free.
-        if start < 0 or not free[start].any():
+        # Checked before the window is gathered: on most steps of a tracked clip nothing is free,
+        # and a track needs a free point in every frame of the window.
+        if start < 0 or not all(free[k].any() for k in range(start, step + 1)):
             return np.empty((0, len(frames)), np.int64), start
         # Scoring reaches past the window: a wrong first link can look smooth for one triplet by chance.
         horizon = max(step + 1, min(start + config.lookahead, len(frames)))

@@ -144,9 +144,10 @@ class _Frame(NamedTuple):
     spacing: np.ndarray
 
     @classmethod
-    def of(cls, points: np.ndarray) -> "_Frame":
+    def of(cls, points: np.ndarray, spacing: np.ndarray | None = None) -> "_Frame":
+        """The frame of ``points``, its ``spacing`` measured unless given (from an earlier look)."""
         tree = cKDTree(points)
-        return cls(points, tree, _query(tree, points, tree.indices, k=2)[0][:, 1])
+        return cls(points, tree, _query(tree, points, tree.indices, k=2)[0][:, 1] if spacing is None else spacing)
 
     def reflected(self, axes: tuple[bool, bool]) -> "_Frame":
         """The frame mirrored about the centre of its bounding box along the axes chosen (x, y);
@@ -171,10 +172,18 @@ def _query(tree: cKDTree, points: np.ndarray, order: np.ndarray, k: int = 1) -> 
     return distance[back], index[back]
 
 
-def _indexed_pairs(frames: Sequence[np.ndarray]) -> Iterator[tuple[_Frame, _Frame]]:
+def _rank(tree: cKDTree) -> np.ndarray:
+    """Each point's place in ``tree``'s order (near after near)."""
+    rank = np.empty_like(tree.indices)
+    rank[tree.indices] = np.arange(tree.indices.size)
+    return rank
+
+
+def _indexed_pairs(frames: Sequence[np.ndarray], spacings: Sequence[np.ndarray] | None = None) -> Iterator[tuple[_Frame, _Frame]]:
     """Consecutive frames with their search trees, two trees alive at a time: all of a clip's
-    at once took 3 kB a frame (60 MB for 20,000 frames)."""
-    indexed = map(_Frame.of, frames)
+    at once took 3 kB a frame (60 MB for 20,000 frames). ``spacings``: each frame's, when
+    already measured."""
+    indexed = map(_Frame.of, frames, spacings if spacings is not None else [None] * len(frames))
     a = next(indexed, None)
     for b in indexed:
         yield a, b
@@ -204,10 +213,16 @@ def _links(a: _Frame, b: _Frame) -> tuple[np.ndarray, np.ndarray]:
     if a.points.shape[0] < 2 or b.points.shape[0] < 2:
         return link, reach
     distance, forward = _query(b.tree, a.points, a.tree.indices)
-    backward = _query(a.tree, b.points, b.tree.indices)[1]
-    mutual = backward[forward] == np.arange(a.points.shape[0])
     bound = _CLEAR_FRACTION * np.minimum(a.spacing, b.spacing[forward])
-    keep = mutual & (distance < bound)
+    near = np.flatnonzero(distance < bound)
+    # Whether a point is the nearest of its nearest is asked only where it is near enough to be
+    # kept: the links by chance are few, and their looks asked it of every point of the frame.
+    # In the order of b's tree, as _query asks.
+    asked = forward[near]
+    order = np.argsort(_rank(b.tree)[asked], kind="stable")
+    backward = np.empty_like(asked)
+    backward[order] = a.tree.query(b.points[asked[order]])[1] if asked.size else asked
+    keep = near[backward == near]
     link[keep] = forward[keep]
     reach[keep] = bound[keep]
     return link, reach
@@ -269,11 +284,15 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     if motion == "smooth":
         return MotionChoice("im2", None, float("nan"), 0, "smooth motion, as asked")
     frames = [np.asarray(f, dtype=float).reshape(-1, 2) for f in frames]
-    links, reaches = [], []
+    links, reaches, spacings = [], [], []
     for a, b in _indexed_pairs(frames):
         link, reach = _links(a, b)
         links.append(link)
         reaches.append(reach)
+        spacings.append(a.spacing)
+    if links:
+        # Kept for the looks at chance links below: measured again, they were half of each look.
+        spacings.append(b.spacing)
     real = sum(int(np.count_nonzero(link >= 0)) for link in links)
     if motion == "random":
         if real == 0:
@@ -317,7 +336,7 @@ def choose_motion(frames: Sequence[np.ndarray], motion: str = "auto") -> MotionC
     # and the minimum number of chains alone keeps the chance links of so sparse a scene from
     # counting.
     def chance(axes: tuple[bool, bool]) -> float:
-        return sum(int(np.count_nonzero(_links(a, b.reflected(axes))[0] >= 0)) for a, b in _indexed_pairs(frames)) / real
+        return sum(int(np.count_nonzero(_links(a, b.reflected(axes))[0] >= 0)) for a, b in _indexed_pairs(frames, spacings)) / real
 
     coincidence = chance((True, True)) if mean_points >= 3 else 0.0
     if coincidence > _MAX_COINCIDENCE:

@@ -22,9 +22,8 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from .initialisation import pairs_within
+from .initialisation import pairs_within, shared_trees, tree_of
 from .persistence import MotionStatistics, _predicted, _turned
 from .tracks import NO_MEASUREMENT, Tracks
 
@@ -105,15 +104,18 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
                 step[into] = xy[rows[into], k] - xy[rows[into], k - 1] - drift
             sigma = np.sqrt(statistics.noise**2 + statistics.relative**2 * np.einsum("ij,ij->i", step, step))
             here = xy[rows, k]
-            pairs = [cKDTree(here).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
             # A track that changes its velocity at k beyond the encounter distance may hold a
             # neighbour's point there (taken after a wrong link nearby): its pairs reach to the gate.
             both = np.flatnonzero(into & out)
             change = np.zeros((0, 2)) if not both.size else xy[rows[both], k + 1] - xy[rows[both], k] - drift - statistics.persistence * _turned(step[both], statistics.turn)
             kinked = both[np.hypot(*change.T) > _ENCOUNTER_SIGMAS * sigma[both]]
-            if kinked.size:
-                owner, near = pairs_within(here[kinked], _KINK_REACH * sigma[kinked], here)
-                pairs.append(np.column_stack((kinked[owner], near))[kinked[owner] != near])
+            # One tree of the frame's points serves both searches, let go after them: built twice,
+            # trees were a third of the repair at 10,000 points a frame.
+            with shared_trees():
+                pairs = [tree_of(here).query_pairs(_ENCOUNTER_SIGMAS * float(sigma.max()), output_type="ndarray")]
+                if kinked.size:
+                    owner, near = pairs_within(here[kinked], _KINK_REACH * sigma[kinked], here)
+                    pairs.append(np.column_stack((kinked[owner], near))[kinked[owner] != near])
             if not any(p.size for p in pairs):
                 continue
             # Each pair once, smaller index first, in order: as one number per pair, which sorts
@@ -140,6 +142,8 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
             visit = list(np.flatnonzero(best < now - _MARGIN))
             heapq.heapify(visit)
             seen = -1
+            # Pairs weighed again on the tracks as they are now, by their place in ``visit``.
+            fresh: dict[int, tuple] = {}
             while visit:
                 p = heapq.heappop(visit)
                 if p <= seen:
@@ -150,13 +154,21 @@ def resolve_crossings(tracks: Tracks, statistics: MotionStatistics) -> Tracks:
                     if budget <= 0 or not (kink[q] or np.hypot(*(xy[pair[0], k] - xy[pair[1], k])) <= _ENCOUNTER_SIGMAS * max(sigma[a[q]], sigma[b[q]])):
                         continue
                     budget -= 1
-                    [pair_now], [pair_best], [span] = _pairings(xy, measured, i[q : q + 1], j[q : q + 1], k, statistics)
+                    if p not in fresh:
+                        # Weighed together with the pairs still to visit that hold an exchanged
+                        # track, as many as the budget allows: until the next exchange the tracks
+                        # stay as they are (a swarm's pairs were weighed one call each).
+                        pending = sorted({r for r in visit if r > p and exchanged.intersection((int(first_i[r]), int(first_j[r])))})
+                        batch = np.array([p, *pending[:budget]])
+                        fresh = dict(zip(batch.tolist(), zip(*_pairings(xy, measured, first_i[batch], first_j[batch], k, statistics))))
+                    pair_now, pair_best, span = fresh[p]
                 else:
                     pair_now, pair_best, span = now[p], best[p], spans[p]
                 if pair_best < pair_now - _MARGIN:
                     for array in (xy, measurement, measured):
                         array[pair, span[0] : span[1]] = array[pair[::-1], span[0] : span[1]]
                     exchanged.update(pair)
+                    fresh = {}
                     changed = True
                     later = p + 1 + np.flatnonzero(np.isin(first_i[p + 1 :], pair) | np.isin(first_j[p + 1 :], pair))
                     for r in later.tolist():
@@ -232,14 +244,17 @@ def _bridge_costs(xy: np.ndarray, seen: np.ndarray, statistics: MotionStatistics
     drift = np.asarray(s.drift)
     total = np.zeros(xy.shape[0])
     width = xy.shape[2]
-    for gap in range(2, width):
+    # Frames from each measured point to its track's next measured one (width for none): every
+    # bridge found at once, and only the gaps that occur looked at (most windows have none;
+    # masks of the missed frames, gap by gap, were a quarter of the repair on a swarm).
+    if seen.all():
+        return total
+    frame = np.arange(width)
+    following = np.minimum.accumulate(np.where(seen, frame, width)[..., :0:-1], axis=-1)[..., ::-1]
+    span = np.where(seen[..., :-1] & (following < width), following - frame[:-1], 0)
+    for gap in np.unique(span[span >= 2]).tolist():
         # Measured at j and j + gap, missed in between.
-        bridge = seen[..., : width - gap] & seen[..., gap:]
-        for inner in range(1, gap):
-            bridge &= ~seen[..., inner : width - gap + inner]
-        if not bridge.any():
-            continue
-        pair, track, j = np.nonzero(bridge)
+        pair, track, j = np.nonzero(span == gap)
         velocity = (xy[pair, track, j + gap] - xy[pair, track, j]) / gap - drift
         known = (j > 0) & seen[pair, track, np.maximum(j - 1, 0)]
         before = np.where(known[:, None], xy[pair, track, j] - xy[pair, track, np.maximum(j - 1, 0)] - drift, 0.0)
