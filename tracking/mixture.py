@@ -206,8 +206,8 @@ def _em(before: np.ndarray, after: np.ndarray, speed2: np.ndarray, wrong_log: np
                 return None
             # Each state's own turn, as the scene's is fitted (fit_chains): a random walk's
             # turn is noise, and the scene's, measured mostly on walkers, turned smooth movers.
-            norm = max(np.dot(w, speed2), 1e-12)
-            along, across = float(np.dot(w, dot)) / norm, float(np.dot(w, cross)) / norm
+            norm = max(float(np.einsum("i,i->", w, speed2)), 1e-12)
+            along, across = float(np.einsum("i,i->", w, dot)) / norm, float(np.einsum("i,i->", w, cross)) / norm
             persistence, turn = min(float(np.hypot(along, across)), 1.0), float(np.arctan2(across, along))
             if along <= 0:
                 persistence, turn = max(along, -1.0), 0.0
@@ -249,8 +249,8 @@ def _stickiness(resp: np.ndarray, follows: np.ndarray, lag: int) -> float:
 
 def _weighted_fit(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     """Weighted least-squares c0, c1 >= 0 of y = c0 + c1 x (the normal equations: two unknowns)."""
-    sw, swx, swy = w.sum(), np.dot(w, x), np.dot(w, y)
-    swxx, swxy = np.dot(w * x, x), np.dot(w * x, y)
+    sw, swx, swy = w.sum(), np.einsum("i,i->", w, x), np.einsum("i,i->", w, y)
+    swxx, swxy = np.einsum("i,i,i->", w, x, x), np.einsum("i,i,i->", w, x, y)
     det = sw * swxx - swx * swx
     c0, c1 = ((swxx * swy - swx * swxy) / det, (sw * swxy - swx * swy) / det) if det > 1e-12 * max(sw * swxx, 1e-300) else (-1.0, -1.0)
     if c1 < 0:
