@@ -63,8 +63,8 @@ DISTINCT = 0.5
 # square root of their density); chosen on tuning seeds 0-1 (see fit_states).
 WIDEST = 0.35
 # Chains the fit uses at most, in runs of LAGS + 1 evenly spaced over all of them: EM's cost grows
-# with the chains (of 200,000: 13 s of CPU on 100,000, 0.3 s on 10,000) and a few thousand pin
-# three states' persistence and noise to a few hundredths.
+# with the chains (100,000 chains of two states: 1.8 s of CPU on all of them, 0.26 s on 10,000),
+# and a few thousand pin three states' persistence and noise to a few hundredths.
 MOST_CHAINS = 10_000
 _ITERATIONS = 60
 # The broad component of wrong links: a velocity drawn from this many times the spread of all
